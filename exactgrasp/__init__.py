@@ -1,0 +1,80 @@
+"""exactgrasp: grasp descriptors from hand-object intersection along rigid paths.
+
+The public names follow ``docs/architecture.md``::
+
+    import exactgrasp as eg
+    sampler = eg.PathSampler.preset("balanced")
+    grasp = eg.Grasp(eg.hands.barrett(), eg.objects.box(), object_pose=T)
+    d = eg.compute_descriptor(grasp, sampler, backend="voxel")
+"""
+
+from __future__ import annotations
+
+__version__ = "0.1.0"
+
+from exactgrasp import objects
+from exactgrasp.backends import Backend, available_backends, get_backend, register_backend
+from exactgrasp.descriptor import Descriptor, compute_descriptor, distance, pairwise_distances
+from exactgrasp.errors import (
+    BackendError,
+    ExactGraspError,
+    GraspFileError,
+    JointError,
+    MeshError,
+    MissingDependencyError,
+    ModelError,
+)
+from exactgrasp.frames import FrameError, HandFrame
+from exactgrasp.grasp import Grasp
+from exactgrasp.hand import Hand
+from exactgrasp.noise import joint_noise, object_pose_noise
+from exactgrasp.sampling import PathSampler
+from exactgrasp.solid import Solid
+
+
+def __getattr__(name: str):
+    # Modules that pull in heavier optional packages load on first use.
+    import importlib
+
+    lazy = {
+        "hands": ("exactgrasp.hands", None),
+        "close_fingers": ("exactgrasp.closing", "close_fingers"),
+        "compare_backends": ("exactgrasp.compare", "compare_backends"),
+    }
+    if name in lazy:
+        module_name, attr = lazy[name]
+        module = importlib.import_module(module_name)
+        return module if attr is None else getattr(module, attr)
+    raise AttributeError(f"module 'exactgrasp' has no attribute {name!r}")
+
+
+__all__ = [
+    "Backend",
+    "BackendError",
+    "Descriptor",
+    "ExactGraspError",
+    "FrameError",
+    "Grasp",
+    "GraspFileError",
+    "Hand",
+    "HandFrame",
+    "JointError",
+    "MeshError",
+    "MissingDependencyError",
+    "ModelError",
+    "PathSampler",
+    "Solid",
+    "__version__",
+    "available_backends",
+    "close_fingers",
+    "compare_backends",
+    "compute_descriptor",
+    "distance",
+    "get_backend",
+    "hands",
+    "joint_noise",
+    "object_pose_noise",
+    "objects",
+    "pairwise_distances",
+    "register_backend",
+]

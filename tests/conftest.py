@@ -1,0 +1,45 @@
+"""Shared fixtures: the shared data folder (skip with a reason when absent), small geometry."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("EXACTGRASP_NO_PROGRESS", "1")
+
+#: ``../shared/data`` beside the repository, as the brief lays it out.
+SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Path:
+    if not (SHARED_DATA / "osu-objects").is_dir():
+        pytest.skip(f"shared data not found at {SHARED_DATA} (the authors' objects and grasps)")
+    return SHARED_DATA
+
+
+def box_arrays(lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """A closed, outward-oriented axis-aligned box as (vertices (8, 3), faces (12, 3))."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    vertices = lo + corners * (hi - lo)
+    faces = np.array(
+        [
+            [0, 1, 3],
+            [0, 3, 2],  # x = lo
+            [4, 6, 7],
+            [4, 7, 5],  # x = hi
+            [0, 4, 5],
+            [0, 5, 1],  # y = lo
+            [2, 3, 7],
+            [2, 7, 6],  # y = hi
+            [0, 2, 6],
+            [0, 6, 4],  # z = lo
+            [1, 5, 7],
+            [1, 7, 3],  # z = hi
+        ]
+    )
+    return vertices, faces

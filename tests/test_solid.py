@@ -1,0 +1,136 @@
+import warnings
+
+import numpy as np
+import pytest
+import trimesh
+
+from exactgrasp import MeshError, Solid
+from tests.conftest import box_arrays
+
+
+def test_box_volume_and_units():
+    v, f = box_arrays([0, 0, 0], [10, 20, 30])
+    solid = Solid(v, f, units="mm")
+    assert solid.volume == pytest.approx(6000e-9, rel=1e-12)
+    assert solid.extent == pytest.approx(0.03)
+    assert Solid(v, f, units="cm").volume == pytest.approx(6e-3, rel=1e-12)
+    assert Solid(v, f, units="inch").volume == pytest.approx(6000 * 0.0254**3, rel=1e-12)
+
+
+def test_unknown_units():
+    v, f = box_arrays([0, 0, 0], [1, 1, 1])
+    with pytest.raises(MeshError, match="units='furlong' is not known"):
+        Solid(v, f, units="furlong")
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(MeshError, match=r"nothere\.stl: no such file"):
+        Solid.from_file(tmp_path / "nothere.stl")
+
+
+def test_nan_coordinates():
+    v, f = box_arrays([0, 0, 0], [1, 1, 1])
+    v[3, 1] = np.nan
+    with pytest.raises(MeshError, match="1 vertices have NaN or infinite coordinates"):
+        Solid(v, f, name="nanbox")
+
+
+def test_nan_in_file(tmp_path):
+    v, f = box_arrays([0, 0, 0], [0.1, 0.1, 0.1])
+    v[0, 0] = np.inf
+    path = tmp_path / "inf.stl"
+    trimesh.Trimesh(v, f, process=False).export(path)
+    with pytest.raises(MeshError, match=r"inf\.stl: .* NaN or infinite"):
+        Solid.from_file(path)
+
+
+def test_empty_mesh():
+    with pytest.raises(MeshError, match="the mesh is empty"):
+        Solid(np.zeros((0, 3)), np.zeros((0, 3), int), name="empty")
+
+
+def test_points_only_file(tmp_path):
+    path = tmp_path / "cloud.ply"
+    trimesh.PointCloud(np.random.default_rng(0).random((10, 3))).export(path)
+    with pytest.raises(MeshError, match=r"cloud\.ply: the mesh is empty"):
+        Solid.from_file(path)
+
+
+def test_open_mesh_refused_with_repair_hint():
+    v, f = box_arrays([0, 0, 0], [1, 1, 1])
+    with pytest.raises(MeshError, match=r"open box: not a closed surface .*repair=True"):
+        Solid(v, f[:-1], name="open box")
+
+
+def test_inconsistent_winding_refused():
+    v, f = box_arrays([0, 0, 0], [1, 1, 1])
+    f = f.copy()
+    f[0] = f[0][::-1]
+    with pytest.raises(MeshError, match="not consistently oriented.*repair=True"):
+        Solid(v, f)
+
+
+def test_inside_out_flipped_with_warning_or_refused():
+    v, f = box_arrays([0, 0, 0], [1, 1, 1])
+    with pytest.warns(UserWarning, match="inside-out .* flipped"):
+        solid = Solid(v, f[:, ::-1], name="inverted")
+    assert solid.volume == pytest.approx(1.0)
+    with pytest.raises(MeshError, match=r"signed volume is -1 .*inside-out.*orientation='flip'"):
+        Solid(v, f[:, ::-1], orientation="refuse")
+
+
+def test_bad_face_indices():
+    v, f = box_arrays([0, 0, 0], [1, 1, 1])
+    with pytest.raises(MeshError, match="faces index vertices outside 0..7"):
+        Solid(v, f + 1)
+
+
+def test_millimetres_read_as_metres():
+    v, f = box_arrays([0, 0, 0], [300, 50, 200])
+    with pytest.raises(MeshError, match="too large for a grasped object.*units='mm'"):
+        Solid(v, f)
+    assert Solid(v, f, check_scale=False).volume == pytest.approx(3e6)
+
+
+def test_foodclip_is_open_and_repairs_to_two_halves(shared_data):
+    path = shared_data / "osu-objects" / "FoodClip.STL"
+    with pytest.raises(MeshError, match=r"FoodClip\.STL: not a closed surface.*repair=True"):
+        Solid.from_file(path, units="mm")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        solid = Solid.from_file(path, units="mm", repair=True)
+    # the shared data's own closing (4 planar caps, two halves): 99,902 mm^3
+    assert solid.volume == pytest.approx(99_902e-9, rel=1e-3)
+    report = solid.repair_report
+    assert report["volume_after"] == solid.volume
+    assert report["volume_before"] == pytest.approx(1.0005e-4, rel=1e-3)
+    assert any("volume" in str(w.message) and "->" in str(w.message) for w in caught)
+    assert len(solid.to_trimesh().split()) == 2
+
+
+def test_spray_bottle_reads_in_millimetres(shared_data):
+    solid = Solid.from_file(shared_data / "osu-objects" / "SprayBottle.STL", units="mm")
+    assert solid.volume == pytest.approx(1.22924e-3, rel=1e-5)  # shared data README
+    assert len(solid.faces) == 11144
+
+
+def test_surface_samples_units(shared_data):
+    obj = shared_data / "osu-objects"
+    solid = Solid.from_file(
+        obj / "SprayBottle.STL", units="mm", surface_samples=obj / "SprayBottle_P.ply"
+    )
+    samples = solid.surface_samples
+    assert samples.shape[1] == 3 and len(samples) > 1000
+    lo, hi = solid.bounds
+    assert np.all(samples >= lo - 1e-3) and np.all(samples <= hi + 1e-3)
+
+
+def test_transformed_and_hash():
+    v, f = box_arrays([0, 0, 0], [1, 1, 1])
+    solid = Solid(v, f)
+    moved = solid.transformed(np.diag([1.0, 1.0, 1.0, 1.0]) + np.eye(4) * 0)
+    assert moved.hash == solid.hash
+    shift = np.eye(4)
+    shift[:3, 3] = [1, 2, 3]
+    assert solid.transformed(shift).hash != solid.hash
+    assert solid.transformed(shift).volume == pytest.approx(1.0)
