@@ -68,7 +68,8 @@ def read_hand(data: dict, base_dir: Path, source: str, overrides: dict) -> Hand:
             from exactgrasp import hands
 
             builder = hands.get(spec["name"])
-            return builder(joints=joints, frame=frame, on_limit=on_limit)
+            options = spec.get("options") or {}
+            return builder(joints=joints, frame=frame, on_limit=on_limit, **options)
         if kind == "file":
             path = _resolve(base_dir, spec["path"], source, "hand mesh")
             return Hand.from_file(
@@ -143,7 +144,7 @@ def write_hand(hand: Hand, base_dir: Path, stem: str) -> dict[str, Any]:
     src = hand.source or {}
     kind = src.get("type")
     if kind == "builtin":
-        out["hand"] = {"type": "builtin", "name": src["name"]}
+        out["hand"] = {"type": "builtin", "name": src["name"], "options": src.get("options", {})}
     elif kind == "model":
         out["hand_model"] = _relative(src["path"], base_dir)
         if src.get("options"):

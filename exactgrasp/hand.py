@@ -235,13 +235,8 @@ class Hand:
         -------
         Hand
         """
+        # Unknown names are reported by the model's own check (it lists the valid ones).
         merged = {**self.joints, **joints}
-        unknown = sorted(set(joints) - set(self.joint_names))
-        if unknown:
-            raise JointError(
-                f"unknown joint(s) {unknown} for {self.model.name}; valid names: "
-                f"{list(self.joint_names)}."
-            )
         return Hand(
             self.model,
             joints=merged,

@@ -1,0 +1,155 @@
+import numpy as np
+import pytest
+
+import exactgrasp as eg
+from exactgrasp import backends as registry
+from exactgrasp.descriptor import DescriptorError
+from tests.conftest import box_arrays
+
+
+class ShiftBackend(eg.Backend):
+    """Volume = squared x-translation of the pose: known numbers without geometry."""
+
+    name = "shift"
+
+    def __init__(self, scale: float = 1.0):
+        self.scale = scale
+
+    @property
+    def params(self):
+        return {"scale": self.scale}
+
+    def volumes(self, grasp, poses):
+        poses = registry.check_poses(poses)
+        return self.scale * poses[..., 0, 3] ** 2
+
+
+@pytest.fixture
+def grasp():
+    hand = eg.Hand.from_meshes(
+        [box_arrays([-0.05, -0.05, 0.0], [0.05, 0.05, 0.02])],
+        frame=eg.HandFrame.from_palm([0, 0, 0.02], [0, 0, 1], [0, 1, 0], 0.08),
+    )
+    return eg.Grasp(hand, eg.Solid(*box_arrays([0, 0, 0], [0.01, 0.01, 0.01])), name="g")
+
+
+@pytest.fixture(autouse=True)
+def _shift_backend():
+    eg.register_backend("shift", ShiftBackend)
+    yield
+    registry._REGISTERED.pop("shift", None)
+
+
+def test_descriptor_values_are_volume_over_hand_volume(grasp):
+    sampler = eg.PathSampler(3, 2, 2, n_steps=4)
+    d = eg.compute_descriptor(grasp, sampler, backend="shift", scale=2.0)
+    expected = 2.0 * sampler.poses()[..., 0, 3] ** 2 / grasp.canonical_hand_volume
+    np.testing.assert_array_equal(d.values, expected)
+    assert d.shape == (sampler.n_paths, 4)
+    meta = d.metadata
+    assert meta["backend"] == "shift" and meta["backend_params"] == {"scale": 2.0}
+    assert meta["sampler"] == sampler.params
+    assert meta["version"] == eg.__version__
+    assert meta["object_hash"] == grasp.object.hash
+    assert meta["hand_volume_m3"] == pytest.approx(0.1 * 0.1 * 0.02)
+
+
+def test_save_load_round_trip(tmp_path, grasp):
+    d = eg.compute_descriptor(grasp, eg.PathSampler(2, 1, 2, n_steps=3), backend="shift")
+    loaded = eg.Descriptor.load(d.save(tmp_path / "d.npz"))
+    assert np.array_equal(loaded.values, d.values)
+    assert loaded.metadata == d.metadata
+    assert np.array_equal(loaded.sampler.poses(), d.sampler.poses())
+
+
+def test_distances():
+    a = eg.Descriptor(np.array([[0.0, 1.0, 3.0], [0.0, 0.0, 0.0]]))
+    b = eg.Descriptor(np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]))
+    assert eg.distance(a, b, "l2") == pytest.approx(np.sqrt(1 + 9 + 3))
+    # step differences: a -> [[1, 2], [0, 0]], b -> [[0, 0], [0, 0]]
+    assert eg.distance(a, b, "l2_diff") == pytest.approx(np.sqrt(5))
+    m = eg.pairwise_distances([a, b, a])
+    np.testing.assert_allclose(
+        m, [[0, np.sqrt(13), 0], [np.sqrt(13), 0, np.sqrt(13)], [0, np.sqrt(13), 0]]
+    )
+    with pytest.raises(DescriptorError, match="distance kind 'l1' is unknown"):
+        eg.distance(a, b, "l1")
+    with pytest.raises(DescriptorError, match="not comparable"):
+        eg.distance(a, eg.Descriptor(np.zeros((3, 3))))
+
+
+def test_descriptor_refuses_nan_and_bad_files(tmp_path):
+    with pytest.raises(DescriptorError, match="NaN or infinite"):
+        eg.Descriptor(np.array([[np.nan]]))
+    with pytest.raises(DescriptorError, match="no such descriptor file"):
+        eg.Descriptor.load(tmp_path / "x.npz")
+    np.savez(tmp_path / "other.npz", a=np.zeros(2))
+    with pytest.raises(DescriptorError, match="not a descriptor file"):
+        eg.Descriptor.load(tmp_path / "other.npz")
+
+
+def test_nan_volumes_from_a_backend_are_an_error(grasp):
+    class NanBackend(ShiftBackend):
+        name = "nan"
+
+        def volumes(self, grasp, poses):
+            out = super().volumes(grasp, poses)
+            out[0, 0] = np.nan
+            return out
+
+    with pytest.raises(DescriptorError, match=r"returned \d+ invalid \(NaN or negative\)"):
+        eg.compute_descriptor(grasp, eg.PathSampler(2, 1, 2, n_steps=3), backend=NanBackend())
+
+
+def test_registry_errors(monkeypatch):
+    with pytest.raises(eg.BackendError, match="unknown backend 'nope'; available:"):
+        eg.get_backend("nope")
+    with pytest.raises(eg.BackendError, match="bad parameters"):
+        eg.get_backend("shift", resolution=3)
+    with pytest.raises(eg.BackendError, match="set parameters when constructing"):
+        eg.get_backend(ShiftBackend(), scale=2)
+    with pytest.raises(eg.BackendError, match="not a Backend subclass"):
+        eg.register_backend("x", dict)
+    monkeypatch.setitem(registry._NEEDS, "shift2", [("no_such_module_xyz", "xyz-pkg", "exact")])
+    monkeypatch.setitem(registry._BUILTIN, "shift2", "tests.test_descriptor:ShiftBackend")
+    with pytest.raises(
+        eg.MissingDependencyError, match=r"pip install xyz-pkg.*exactgrasp\[exact\]"
+    ):
+        eg.get_backend("shift2")
+    assert "shift2" not in eg.available_backends()
+
+
+def test_entry_point_group_lists_builtins():
+    from importlib.metadata import entry_points
+
+    names = {ep.name for ep in entry_points(group="exactgrasp.backends")}
+    assert {"voxel", "exact"} <= names
+    assert "shift" in eg.available_backends()
+
+
+def test_compare_backends_table_and_summary(grasp, tmp_path):
+    sampler = eg.PathSampler(3, 2, 2, n_steps=4)
+    result = eg.compare_backends(grasp, sampler, backends=(ShiftBackend(3.0), ShiftBackend(1.0)))
+    table = result.table
+    assert len(table["path"]) == sampler.n_poses
+    ref = table["value_shift1"]
+    est = table["value_shift0"]
+    np.testing.assert_allclose(est, 3 * ref)
+    s = result.summary["shift0"]
+    compared = ref > 1e-4
+    assert s["n_compared"] == int(compared.sum())
+    assert s["median_abs_rel"] == pytest.approx(2.0)
+    assert s["max_abs_rel"] == pytest.approx(2.0)
+    assert s["correlation"] == pytest.approx(1.0)
+    assert s["mean_signed_error"] == pytest.approx(2 * ref.mean())
+    assert "median|rel|" in result.summary_text()
+    from exactgrasp.compare import write_table
+
+    csv_path = write_table(table, tmp_path / "t.csv")
+    lines = csv_path.read_text().splitlines()
+    assert len(lines) == sampler.n_poses + 1 and lines[0].startswith("path,step,t,kind")
+    import pyarrow.parquet as pq
+
+    parquet = pq.read_table(write_table(table, tmp_path / "t.parquet"))
+    assert parquet.num_rows == sampler.n_poses
+    np.testing.assert_array_equal(parquet.column("value_shift0").to_numpy(), est)
