@@ -1,0 +1,357 @@
+"""Inside/outside grids of closed triangle shells (the voxel estimator's grids).
+
+A grid is a regular lattice of nodes ``origin + spacing * (i, j, k)``. A node is inside when the
+winding number of the shells around it is at least 1, so shells that overlap each other (the
+separate links of a hand) give the inside of their union, and the several bodies of an object
+need no merging first.
+
+The winding number is counted column by column: a ray leaves every node upwards (+z) and each
+triangle it crosses adds the sign of that triangle's normal z component. Rays that pass exactly
+through an edge or a vertex are resolved by a symbolic perturbation of the ray (as if it were
+moved by an infinitesimal ``(eps, eps**2)`` in x and y), computed with the same floating-point
+operations for both triangles that share an edge, so such a ray is counted by exactly one of
+them and never twice or not at all.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from exactgrasp.errors import BackendError
+
+# Keeps floor(resolution * side / longest) from losing a voxel to rounding when the ratio is
+# an integer in exact arithmetic (a 2:1 box at resolution 50 gets 25 voxels, not 24).
+_RATIO_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A regular lattice of nodes with one value per node.
+
+    Attributes
+    ----------
+    values : numpy.ndarray, shape (nx, ny, nz), uint8
+        1 where the node is inside the shells, 0 elsewhere.
+    origin : numpy.ndarray, shape (3,), float64
+        Position of node (0, 0, 0), in the units of the meshes.
+    spacing : float
+        Distance between neighbouring nodes along every axis (cubic voxels), same units.
+    """
+
+    values: np.ndarray
+    origin: np.ndarray
+    spacing: float
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """Number of nodes along x, y and z."""
+        return tuple(int(n) for n in self.values.shape)
+
+    def node_positions(self, mask: np.ndarray | None = None) -> np.ndarray:
+        """Positions of the nodes (all, or those where `mask` is true), shape (n, 3)."""
+        index = np.argwhere(np.ones(self.shape, bool) if mask is None else mask)
+        return self.origin + self.spacing * index.astype(np.float64)
+
+
+def stack_triangles(shells: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """Gather the triangles of several shells into one array.
+
+    Parameters
+    ----------
+    shells : list of (V, F)
+        Closed, outward-oriented shells: V (n, 3) float vertices, F (m, 3) integer faces.
+
+    Returns
+    -------
+    numpy.ndarray, shape (total faces, 3, 3), float64
+        Corner coordinates of every triangle.
+    """
+    if len(shells) == 0:
+        raise BackendError("no shells were given; pass at least one (vertices, faces) pair.")
+    parts = []
+    for number, (vertices, faces) in enumerate(shells):
+        vertices = np.asarray(vertices, dtype=np.float64)
+        faces = np.asarray(faces, dtype=np.int64)
+        if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
+            raise BackendError(
+                f"shell {number}: expected vertices (n, 3) and faces (m, 3), got "
+                f"{vertices.shape} and {faces.shape}."
+            )
+        if len(faces) == 0 or not np.all(np.isfinite(vertices)):
+            raise BackendError(f"shell {number} has no faces or non-finite vertices.")
+        if faces.min() < 0 or faces.max() >= len(vertices):
+            raise BackendError(f"shell {number} has face indices outside its vertex array.")
+        parts.append(vertices[faces])
+    return np.concatenate(parts, axis=0)
+
+
+#: How many cubic voxels a shorter side gets: "floor" (the authors' code) or "round".
+GRID_RULES = ("floor", "round")
+
+
+def grid_layout(
+    lower: np.ndarray, upper: np.ndarray, resolution: int, pad: int, rule: str = "floor"
+) -> tuple[np.ndarray, float, tuple[int, int, int]]:
+    """Place voxel centres over a bounding box.
+
+    The longest side gets `resolution` voxels of size ``longest / resolution``. With
+    ``rule="floor"`` (the authors' code) another side gets
+    ``max(1, floor(resolution * side / longest))`` voxels of the same size, centred on the box,
+    so up to one voxel of that side is left out (up to half at either end): a flat object
+    loses interior volume (the cereal box: 12 %). With ``rule="round"`` it gets the nearest
+    whole number of voxels, ``floor(resolution * side / longest + 1/2)``, centred, so a box's
+    interior is off by at most half a voxel per side. `pad` more nodes are added at each end
+    of every axis.
+
+    Parameters
+    ----------
+    lower, upper : numpy.ndarray, shape (3,)
+        Corners of the bounding box.
+    resolution : int
+        Voxels along the longest side.
+    pad : int
+        Extra nodes on each side (0 or more).
+    rule : {"floor", "round"}
+        Voxel count of the shorter sides, see above.
+
+    Returns
+    -------
+    origin : numpy.ndarray, shape (3,)
+        Position of node (0, 0, 0).
+    spacing : float
+        Voxel size.
+    shape : tuple of int
+        Nodes along each axis, padding included.
+    """
+    sides = np.asarray(upper, np.float64) - np.asarray(lower, np.float64)
+    longest = float(sides.max())
+    if not longest > 0:
+        raise BackendError("the shells have an empty bounding box; pass solids with volume.")
+    spacing = longest / resolution
+    ratio = resolution * sides / longest
+    if rule == "floor":
+        counts = np.floor(ratio + _RATIO_TOLERANCE)
+    elif rule == "round":
+        counts = np.floor(ratio + 0.5)
+    else:
+        raise BackendError(f"grid rule {rule!r} is unknown; use one of {GRID_RULES}.")
+    counts = np.maximum(1, counts).astype(int)
+    centre = 0.5 * (np.asarray(lower, np.float64) + np.asarray(upper, np.float64))
+    origin = centre - spacing * (0.5 * (counts - 1) + pad)
+    shape = tuple(int(n) + 2 * pad for n in counts)
+    return origin, spacing, shape
+
+
+def occupancy_grid(
+    shells: list[tuple[np.ndarray, np.ndarray]], resolution: int, pad: int = 1, rule: str = "floor"
+) -> Grid:
+    """Inside/outside grid of the union of closed shells.
+
+    Parameters
+    ----------
+    shells : list of (V, F)
+        Closed, outward-oriented shells (they may overlap); V (n, 3), F (m, 3).
+    resolution : int
+        Voxels along the longest side of the shells' bounding box (see `grid_layout`).
+    pad : int
+        Layers of outside nodes added around the box (1 makes interpolation at the border
+        well defined).
+    rule : {"floor", "round"}
+        Voxel count of the shorter sides (see `grid_layout`).
+
+    Returns
+    -------
+    Grid
+        Node values 1 inside the union, 0 outside.
+    """
+    triangles = stack_triangles(shells)
+    flat = triangles.reshape(-1, 3)
+    origin, spacing, shape = grid_layout(flat.min(axis=0), flat.max(axis=0), resolution, pad, rule)
+    # Node (i, j, k) sits at integer coordinates in index space, so column positions are exact.
+    local = (triangles - origin) / spacing
+    values = _winding_inside(local, shape[0], shape[1], shape[2])
+    return Grid(values=values, origin=origin, spacing=spacing)
+
+
+@numba.njit(cache=True)
+def _edge_side(px, py, ax, ay, bx, by):
+    """Side (+1 left, -1 right) of point p for the directed edge a->b, never 0 for a != b.
+
+    The edge is evaluated in one fixed vertex order whichever way it is traversed, so the two
+    triangles that share it get exactly opposite answers.
+    """
+    flip = 1
+    if ax > bx or (ax == bx and ay > by):
+        ax, ay, bx, by = bx, by, ax, ay
+        flip = -1
+    dx = bx - ax
+    dy = by - ay
+    value = dx * (py - ay) - dy * (px - ax)
+    if value > 0.0:
+        return flip
+    if value < 0.0:
+        return -flip
+    # Exactly on the edge's line: decide as if p were moved by (eps, eps**2).
+    if dy != 0.0:
+        return -flip if dy > 0.0 else flip
+    if dx != 0.0:
+        return flip if dx > 0.0 else -flip
+    return 0
+
+
+@numba.njit(cache=True)
+def _edge_value(px, py, ax, ay, bx, by):
+    """Twice the signed area of (a, b, p), in the same fixed vertex order as `_edge_side`."""
+    if ax > bx or (ax == bx and ay > by):
+        return -((ax - bx) * (py - by) - (ay - by) * (px - bx))
+    return (bx - ax) * (py - ay) - (by - ay) * (px - ax)
+
+
+@numba.njit(cache=True)
+def _column_crossings(triangles, nx, ny, count_only, starts, fill, heights, signs):
+    """Visit every (column, triangle) crossing; count them or write height and sign."""
+    for t in range(triangles.shape[0]):
+        ax, ay, az = triangles[t, 0, 0], triangles[t, 0, 1], triangles[t, 0, 2]
+        bx, by, bz = triangles[t, 1, 0], triangles[t, 1, 1], triangles[t, 1, 2]
+        cx, cy, cz = triangles[t, 2, 0], triangles[t, 2, 1], triangles[t, 2, 2]
+        i0 = max(0, int(np.ceil(min(ax, bx, cx))))
+        i1 = min(nx - 1, int(np.floor(max(ax, bx, cx))))
+        j0 = max(0, int(np.ceil(min(ay, by, cy))))
+        j1 = min(ny - 1, int(np.floor(max(ay, by, cy))))
+        for i in range(i0, i1 + 1):
+            px = float(i)
+            for j in range(j0, j1 + 1):
+                py = float(j)
+                s_ab = _edge_side(px, py, ax, ay, bx, by)
+                if s_ab == 0:
+                    continue
+                if _edge_side(px, py, bx, by, cx, cy) != s_ab:
+                    continue
+                if _edge_side(px, py, cx, cy, ax, ay) != s_ab:
+                    continue
+                column = i * ny + j
+                if count_only:
+                    starts[column + 1] += 1
+                    continue
+                # Barycentric weights all share one sign, so the height stays between the
+                # corners' heights even for slivers.
+                wa = _edge_value(px, py, bx, by, cx, cy)
+                wb = _edge_value(px, py, cx, cy, ax, ay)
+                wc = _edge_value(px, py, ax, ay, bx, by)
+                total = wa + wb + wc
+                slot = starts[column] + fill[column]
+                fill[column] += 1
+                heights[slot] = (wa * az + wb * bz + wc * cz) / total
+                # Counter-clockwise in xy means the outward normal points up (+z).
+                signs[slot] = s_ab
+
+
+@numba.njit(cache=True)
+def _winding_inside(triangles, nx, ny, nz):
+    """Nodes (in index coordinates) whose winding number is at least 1, as uint8."""
+    starts = np.zeros(nx * ny + 1, np.int64)
+    fill = np.zeros(nx * ny, np.int64)
+    empty_f = np.zeros(0, np.float64)
+    empty_i = np.zeros(0, np.int8)
+    _column_crossings(triangles, nx, ny, True, starts, fill, empty_f, empty_i)
+    for c in range(nx * ny):
+        starts[c + 1] += starts[c]
+    heights = np.empty(starts[-1], np.float64)
+    signs = np.empty(starts[-1], np.int8)
+    _column_crossings(triangles, nx, ny, False, starts, fill, heights, signs)
+    inside = np.zeros((nx, ny, nz), np.uint8)
+    for c in range(nx * ny):
+        lo, hi = starts[c], starts[c + 1]
+        if hi == lo:
+            continue
+        order = np.argsort(heights[lo:hi])
+        i, j = c // ny, c % ny
+        # Sweep down from the top: the winding number of a node is the sum of the signs of
+        # the crossings above it.
+        winding = 0
+        pointer = hi - lo - 1
+        for k in range(nz - 1, -1, -1):
+            while pointer >= 0 and heights[lo + order[pointer]] > k:
+                winding += signs[lo + order[pointer]]
+                pointer -= 1
+            if winding >= 1:
+                inside[i, j, k] = 1
+    return inside
+
+
+@dataclass(frozen=True)
+class HandOccupancy:
+    """A hand's occupancy grid with a coarse clearance field for skipping far points.
+
+    Attributes
+    ----------
+    grid : Grid
+        Padded inside/outside grid of the union of the hand's links.
+    cell_codes : numpy.ndarray, shape (nx - 1, ny - 1, nz - 1), uint8
+        For each grid cell, its 8 corner values as bits (bit ``dx + 2 dy + 4 dz`` is corner
+        ``(i + dx, j + dy, k + dz)``), so interpolation reads one byte instead of eight.
+    clearance : numpy.ndarray, shape (cx, cy, cz), float64
+        For each coarse cell (`clearance_factor` nodes per axis), the distance in coarse cells
+        to the nearest cell holding an inside node; infinite when the hand has none.
+    clearance_factor : int
+        Grid nodes per coarse cell along each axis.
+    """
+
+    grid: Grid
+    cell_codes: np.ndarray
+    clearance: np.ndarray
+    clearance_factor: int
+
+
+# Coarse cells per axis at most: the clearance field only has to be finer than the blocks of
+# object points it rejects, and must stay small for fine hand grids.
+_CLEARANCE_CELLS = 128
+
+
+def hand_occupancy(
+    links: list[tuple[np.ndarray, np.ndarray]], resolution: int, rule: str = "floor"
+) -> HandOccupancy:
+    """Occupancy grid of the union of a hand's links, padded by one layer of outside nodes.
+
+    Parameters
+    ----------
+    links : list of (V, F)
+        Closed, outward-oriented link shells, V (n, 3) float, F (m, 3) int; they may overlap.
+    resolution : int
+        Voxels along the longest side of the links' bounding box.
+    rule : {"floor", "round"}
+        Voxel count of the shorter sides (see `grid_layout`).
+
+    Returns
+    -------
+    HandOccupancy
+    """
+    from scipy.ndimage import distance_transform_edt
+
+    grid = occupancy_grid(links, resolution, pad=1, rule=rule)
+    factor = max(1, -(-max(grid.shape) // _CLEARANCE_CELLS))
+    cells = [-(-n // factor) for n in grid.shape]
+    padded = np.zeros([c * factor for c in cells], np.uint8)
+    padded[: grid.shape[0], : grid.shape[1], : grid.shape[2]] = grid.values
+    coarse = padded.reshape(cells[0], factor, cells[1], factor, cells[2], factor).max((1, 3, 5))
+    if coarse.any():
+        clearance = distance_transform_edt(coarse == 0).astype(np.float64)
+    else:
+        clearance = np.full(coarse.shape, np.inf)
+    return HandOccupancy(
+        grid=grid, cell_codes=cell_codes(grid.values), clearance=clearance, clearance_factor=factor
+    )
+
+
+def cell_codes(values: np.ndarray) -> np.ndarray:
+    """Pack the 8 corner values of every cell of a 0/1 grid into one byte (see HandOccupancy)."""
+    nx, ny, nz = values.shape
+    codes = np.zeros((nx - 1, ny - 1, nz - 1), np.uint8)
+    for bit in range(8):
+        dx, dy, dz = bit & 1, (bit >> 1) & 1, (bit >> 2) & 1
+        corner = values[dx : nx - 1 + dx, dy : ny - 1 + dy, dz : nz - 1 + dz]
+        codes |= (corner != 0).astype(np.uint8) << bit
+    return codes
