@@ -24,39 +24,33 @@ def _pose(rotation_deg: tuple[float, float, float], translation: tuple[float, fl
 
 
 def demo_grasps() -> list[Grasp]:
-    """Three grasps of the built-in Barrett hand on the built-in objects.
+    """Three contact grasps of the built-in Barrett hand on the built-in objects.
 
-    Each object rests on the palm (palm face at z = 0.08 m) and the fingers are closed onto
-    it with `exactgrasp.close_fingers` when available, so the grasps are contact grasps.
+    Each object is placed just clear of the open hand (the knuckles top out at z = 0.0914 m)
+    and the fingers are closed onto it with `exactgrasp.closing.close_grasp`, so the
+    intersection at the grasp itself is zero.
 
     Returns
     -------
     list of Grasp
     """
     from exactgrasp import hands
+    from exactgrasp.closing import close_grasp
 
+    knuckle_top = 0.0914
     specs = [
-        # name, object, pose (object -> hand), spread
-        ("can", objects.cylinder(), _pose((0, 90, 0), (0, 0, 0.0805 + 0.035)), 0.0),
-        ("box", objects.box((0.06, 0.2, 0.28)), _pose((0, 0, 90), (0, 0, 0.0805 + 0.03)), 0.0),
+        # a can lying across the palm, its axis along x (across the fingers)
+        ("can", objects.cylinder(), _pose((0, 90, 0), (0, 0, knuckle_top + 0.036))),
+        # a cereal-box-like box grasped across its 6 cm side
+        ("box", objects.box((0.2, 0.06, 0.28)), _pose((0, 0, 0), (0, 0, knuckle_top + 0.141))),
+        # the jug's handle, its outer bar along x, the body beyond it
         (
             "jug handle",
             objects.bottle_with_handle(),
-            _pose((0, -90, 0), (-0.12, 0.0, 0.0805 + 0.083 - 0.035)),
-            0.0,
+            _pose((0, 90, 0), (-0.1, 0.0, knuckle_top + 0.085)),
         ),
     ]
-    grasps = []
-    for name, obj, pose, spread in specs:
-        hand = hands.barrett({"finger_1_prox_joint": spread})
-        try:
-            from exactgrasp.closing import close_fingers
-
-            hand = close_fingers(hand, obj, object_pose=pose)
-        except ImportError:
-            hand = hand.with_joints({f"finger_{i}_med_joint": 0.9 for i in (1, 2, 3)})
-        grasps.append(Grasp(hand, obj, pose, name=name))
-    return grasps
+    return [close_grasp(Grasp(hands.barrett(), obj, pose, name=name)) for name, obj, pose in specs]
 
 
 def _plot(descriptors: dict[tuple[str, str], Descriptor], path: Path) -> None:
@@ -85,7 +79,7 @@ def _plot(descriptors: dict[tuple[str, str], Descriptor], path: Path) -> None:
                     color=f"C{k % 10}",
                     label=backend if k == 0 else None,
                 )
-        ax.set_title(f"{grasp_name}: translation-only paths")
+        ax.set_title(f"{grasp_name}: translation-only paths (colour = path)")
         ax.set_xlabel("path time t")
         ax.set_ylabel("intersection / hand volume")
         ax.legend(title="backend (line style)")

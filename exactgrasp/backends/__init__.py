@@ -8,6 +8,7 @@ point group ``exactgrasp.backends``; `register_backend` adds one at run time.
 from __future__ import annotations
 
 import importlib
+import warnings
 from importlib.metadata import entry_points
 from typing import Any
 
@@ -54,7 +55,10 @@ def _load(name: str) -> type[Backend]:
             raise MissingDependencyError(f"the {name!r} backend", package, extra) from exc
     if name in _BUILTIN:
         module_name, _, attr = _BUILTIN[name].partition(":")
-        return getattr(importlib.import_module(module_name), attr)
+        cls = getattr(importlib.import_module(module_name), attr, None)
+        if cls is None:
+            raise BackendError(f"backend {name!r}: {module_name} defines no {attr}.")
+        return cls
     eps = _entry_points()
     if name in eps:
         try:
@@ -77,6 +81,9 @@ def available_backends() -> set[str]:
         try:
             _load(name)
         except (MissingDependencyError, ImportError):
+            continue
+        except Exception as exc:  # a broken plugin must not hide the working backends
+            warnings.warn(f"backend {name!r} is unusable and skipped: {exc}", stacklevel=2)
             continue
         out.add(name)
     return out
