@@ -202,9 +202,7 @@ class Hand:
         -------
         Hand
         """
-        from exactgrasp.models import load_model
-
-        model = load_model(path, **model_kwargs)
+        model = _load_model_cached(Path(path), model_kwargs)
         source = {"type": "model", "path": str(Path(path)), "options": _jsonable(model_kwargs)}
         return cls(model, joints=joints, frame=frame, on_limit=on_limit, source=source)
 
@@ -314,6 +312,39 @@ class Hand:
     def __repr__(self) -> str:
         joints = ", ".join(f"{k}={v:.4g}" for k, v in self.joints.items())
         return f"Hand({self.model.name!r}, {len(self._posed_links)} links, joints: {{{joints}}})"
+
+
+#: Compiled file models, keyed by file identity and options: reading many grasps of one hand
+#: (34 cereal-box grasps, a batch) compiles its URDF once, not once per grasp.
+_MODEL_CACHE: dict[tuple, Any] = {}
+_MODEL_CACHE_SIZE = 8
+
+
+def _file_identity(path: Path) -> tuple:
+    try:
+        stat = path.stat()
+    except OSError:
+        return (str(path), None)
+    return (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+
+
+def _load_model_cached(path: Path, options: dict) -> KinematicModel:
+    """`exactgrasp.models.load_model`, memoised while the file (and its palm_frame.json) is
+    unchanged. Models are shared read-only: a Hand never changes its model."""
+    import json
+
+    from exactgrasp.models import load_model
+
+    key = (
+        _file_identity(path),
+        _file_identity(path.parent / "palm_frame.json"),
+        json.dumps(_jsonable(options), sort_keys=True, default=repr),
+    )
+    if key not in _MODEL_CACHE:
+        if len(_MODEL_CACHE) >= _MODEL_CACHE_SIZE:
+            _MODEL_CACHE.pop(next(iter(_MODEL_CACHE)))
+        _MODEL_CACHE[key] = load_model(path, **options)
+    return _MODEL_CACHE[key]
 
 
 def _frame_from_palm(palm: Any) -> HandFrame:

@@ -149,3 +149,19 @@ def test_joint_noise_needs_joints_with_a_range():
     rigid = eg.Hand.from_meshes([eg.objects.box()], frame=eg.HandFrame.identity())
     with pytest.raises(NoiseError, match=r"has no joints to perturb"):
         rigid.perturb_joints(0.01, rng=0)
+
+
+def test_hand_model_compiled_once_per_file(shared_data, tmp_path):
+    import shutil
+
+    grasps = sorted((shared_data / "barrett-grasps" / "grasps").glob("obj5_*.json"))[:2]
+    a, b = (eg.Grasp.from_file(p) for p in grasps)
+    assert a.hand.model is b.hand.model  # one compile for many grasps of one hand
+    # a changed file is compiled again
+    hand_dir = tmp_path / "hand"
+    shutil.copytree(shared_data / "barrett-grasps" / "hand", hand_dir)
+    first = eg.Hand.from_urdf(hand_dir / "barrett.urdf")
+    assert eg.Hand.from_urdf(hand_dir / "barrett.urdf").model is first.model
+    urdf = hand_dir / "barrett.urdf"
+    urdf.write_text(urdf.read_text() + "\n<!-- edited -->\n")
+    assert eg.Hand.from_urdf(urdf).model is not first.model
