@@ -40,6 +40,8 @@ def __getattr__(name: str):
         "hands": ("exactgrasp.hands", None),
         "close_fingers": ("exactgrasp.closing", "close_fingers"),
         "compare_backends": ("exactgrasp.compare", "compare_backends"),
+        "run_batch": ("exactgrasp.batch", "run_batch"),
+        "read_batch": ("exactgrasp.batch", "read_batch"),
     }
     if name in lazy:
         module_name, attr = lazy[name]
@@ -76,5 +78,7 @@ __all__ = [
     "object_pose_noise",
     "objects",
     "pairwise_distances",
+    "read_batch",
     "register_backend",
+    "run_batch",
 ]

@@ -1,0 +1,410 @@
+"""Files of a batch run: the manifest, the run record, the parts and the consolidated output.
+
+Layout of an output folder (see ``docs/batch.md``)::
+
+    run.json              parameters of the run; a resume with other parameters is refused
+    parts/part-NNNNNN.parquet
+                          rows [N * part_size, (N + 1) * part_size) of the manifest, written
+                          to a temporary name and renamed when complete
+    descriptors.parquet   every descriptor computed, in manifest order
+    errors.jsonl          one line per failed row: id, row, error type, message
+    timings.jsonl         per-part wall times and workers (not deterministic, not compared)
+
+Everything but ``timings.jsonl`` is a function of the manifest and the parameters only, so
+the bytes do not depend on the number of workers or on the order parts finish in.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import uuid
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from exactgrasp.errors import ExactGraspError, require
+
+FORMAT = "exactgrasp.batch/1"
+PARTS_DIR = "parts"
+DESCRIPTORS_FILE = "descriptors.parquet"
+ERRORS_FILE = "errors.jsonl"
+RUN_FILE = "run.json"
+TIMINGS_FILE = "timings.jsonl"
+LOCK_FILE = ".lock"
+TEMP_MARK = ".tmp-"
+# zstd is deterministic and much smaller than snappy on the many exact zeros of descriptors.
+COMPRESSION = "zstd"
+
+
+class BatchError(ExactGraspError, ValueError):
+    """A bad manifest, an output folder holding another run, or a run that cannot go on."""
+
+
+@dataclass(frozen=True)
+class ManifestRow:
+    """One manifest row.
+
+    Attributes
+    ----------
+    index : int
+        0-based position among the manifest's rows (the ``row`` of ``errors.jsonl``).
+    id : str
+    grasp : str or dict or None
+        Path of a grasp file (relative to the manifest's folder) or an inline grasp dict.
+    problem : str or None
+        What is wrong with the row's ``grasp`` entry; the row is then reported as failed.
+    """
+
+    index: int
+    id: str
+    grasp: str | dict | None
+    problem: str | None = None
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """A validated manifest: unique ids, rows in file order."""
+
+    path: Path
+    rows: list[ManifestRow]
+    sha256: str
+
+    @property
+    def base_dir(self) -> Path:
+        """Folder that relative grasp paths are resolved against."""
+        return self.path.resolve().parent
+
+
+def _pa():
+    return require("pyarrow", "exactgrasp batch", "pyarrow", "batch")
+
+
+def _row_grasp(value: Any) -> tuple[str | dict | None, str | None]:
+    """The grasp entry of a row and, when unusable, why."""
+    if isinstance(value, str) and value.lstrip().startswith("{"):
+        try:
+            value = json.loads(value)
+        except json.JSONDecodeError as exc:
+            return None, f"inline grasp is not valid JSON ({exc})"
+    if isinstance(value, dict):
+        return value, None
+    if isinstance(value, str) and value.strip():
+        return value, None
+    if value is None:
+        return None, "the row has no 'grasp' (a grasp file path or an inline grasp object)"
+    return None, f"'grasp' must be a file path or a grasp object, got {type(value).__name__}"
+
+
+def _row_id(value: Any, where: str) -> str:
+    # bool is an int subclass, but True as an id is almost surely a mistake.
+    if isinstance(value, bool) or not isinstance(value, str | int | np.integer):
+        kind = "missing" if value is None else f"a {type(value).__name__}"
+        raise BatchError(f"{where}: 'id' is {kind}; every row needs a string or integer id.")
+    text = str(value)
+    if not text.strip():
+        raise BatchError(f"{where}: 'id' is empty; every row needs a non-empty id.")
+    return text
+
+
+def _jsonl_records(path: Path) -> Iterator[tuple[str, dict]]:
+    with open(path, encoding="utf-8") as handle:
+        for line_number, line in enumerate(handle, start=1):
+            if not line.strip():
+                continue
+            where = f"{path}: line {line_number}"
+            try:
+                record = json.loads(line)
+            except json.JSONDecodeError as exc:
+                raise BatchError(f"{where}: not valid JSON ({exc}).") from exc
+            if not isinstance(record, dict):
+                raise BatchError(f"{where}: expected a JSON object with 'id' and 'grasp'.")
+            yield where, record
+
+
+def _parquet_records(path: Path) -> Iterator[tuple[str, dict]]:
+    pq = require("pyarrow.parquet", "exactgrasp batch", "pyarrow", "batch")
+    try:
+        table = pq.read_table(path)
+    except Exception as exc:
+        raise BatchError(f"{path}: not a readable Parquet file ({exc}).") from exc
+    missing = {"id", "grasp"} - set(table.column_names)
+    if missing:
+        raise BatchError(
+            f"{path}: Parquet manifests need columns 'id' and 'grasp'; missing {sorted(missing)}."
+        )
+    ids = table.column("id").to_pylist()
+    grasps = table.column("grasp").to_pylist()
+    for number, (row_id, grasp) in enumerate(zip(ids, grasps, strict=True), start=1):
+        yield f"{path}: row {number}", {"id": row_id, "grasp": grasp}
+
+
+def read_manifest(path: str | os.PathLike) -> Manifest:
+    """Read and check a manifest before any work starts.
+
+    Parameters
+    ----------
+    path : path-like
+        ``.jsonl`` (one JSON object a line) or ``.parquet``; each row has ``id`` and ``grasp``
+        (a grasp file path relative to the manifest, or an inline grasp; in Parquet, JSON text).
+
+    Returns
+    -------
+    Manifest
+
+    Raises
+    ------
+    BatchError
+        A missing, empty or duplicate id (naming the line or row), unreadable JSON, no rows.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise BatchError(f"{path}: no such manifest file.")
+    suffix = path.suffix.lower()
+    if suffix in (".jsonl", ".ndjson", ".json"):
+        records = _jsonl_records(path)
+    elif suffix in (".parquet", ".pq"):
+        records = _parquet_records(path)
+    else:
+        raise BatchError(
+            f"{path}: unknown manifest type {suffix!r}; use .jsonl (one JSON object a line) or "
+            ".parquet (columns 'id' and 'grasp')."
+        )
+    rows: list[ManifestRow] = []
+    first_seen: dict[str, str] = {}
+    digest = hashlib.sha256()
+    for where, record in records:
+        row_id = _row_id(record.get("id"), where)
+        if row_id in first_seen:
+            raise BatchError(
+                f"{where}: duplicate id {row_id!r} (first at {first_seen[row_id]}); ids must be "
+                "unique."
+            )
+        first_seen[row_id] = where.rpartition(": ")[2]
+        raw = record.get("grasp")
+        grasp, problem = _row_grasp(raw)
+        rows.append(ManifestRow(len(rows), row_id, grasp, problem))
+        # The hash covers what the workers see, so reformatting the file does not change it.
+        entry = {"id": row_id, "grasp": grasp if problem is None else repr(raw)}
+        digest.update(json.dumps(entry, sort_keys=True).encode() + b"\n")
+    if not rows:
+        raise BatchError(f"{path}: the manifest has no rows.")
+    return Manifest(path, rows, digest.hexdigest())
+
+
+# -- the run record -----------------------------------------------------------------------------
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to a temporary file beside ``path``, flush it to disk, rename it."""
+    temp = path.with_name(f"{path.name}{TEMP_MARK}{uuid.uuid4().hex}")
+    with open(temp, "wb") as handle:
+        handle.write(data)
+        handle.flush()
+        os.fsync(handle.fileno())
+    os.replace(temp, path)
+
+
+def check_run_record(out: Path, params: dict[str, Any]) -> None:
+    """Write ``run.json``, or check that the one there holds the same parameters.
+
+    Raises
+    ------
+    BatchError
+        The folder holds a run with other parameters (it would mix results).
+    """
+    path = out / RUN_FILE
+    text = json.dumps(params, sort_keys=True, indent=1) + "\n"
+    if path.exists():
+        try:
+            old = json.loads(path.read_text())
+        except (OSError, json.JSONDecodeError) as exc:
+            raise BatchError(f"{path}: unreadable run record ({exc}); use a new --out.") from exc
+        if old != json.loads(text):
+            keys = sorted(k for k in set(old) | set(params) if old.get(k) != params.get(k))
+            raise BatchError(
+                f"{out} holds a run with other parameters (different: {', '.join(keys)}); "
+                "resuming would mix results. Use the same command as before, or a new --out."
+            )
+        return
+    write_atomic(path, text.encode())
+
+
+@contextlib.contextmanager
+def run_lock(out: Path) -> Iterator[None]:
+    """Hold an exclusive lock on the output folder (released by the OS if the process dies)."""
+    try:
+        import fcntl
+    except ImportError:  # Windows: no advisory locks; one run per folder is up to the user
+        yield
+        return
+    with open(out / LOCK_FILE, "w") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            raise BatchError(
+                f"{out} is in use by another exactgrasp batch run; wait for it or use another "
+                "--out."
+            ) from exc
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def remove_temp_files(out: Path) -> int:
+    """Delete half-written files left by a killed run; returns how many."""
+    count = 0
+    for folder in (out, out / PARTS_DIR):
+        if folder.is_dir():
+            for path in folder.iterdir():
+                if TEMP_MARK in path.name:
+                    path.unlink()
+                    count += 1
+    return count
+
+
+# -- parts --------------------------------------------------------------------------------------
+
+
+def part_schema(n_values: int):
+    """Arrow schema of a part file: a failed row has null values and a non-null error."""
+    pa = _pa()
+    return pa.schema(
+        [
+            ("id", pa.string()),
+            ("row", pa.int64()),
+            ("values", pa.list_(pa.float64(), n_values)),
+            ("metadata", pa.string()),
+            ("error", pa.string()),
+            ("message", pa.string()),
+        ]
+    )
+
+
+def part_path(out: Path, part: int) -> Path:
+    return out / PARTS_DIR / f"part-{part:06d}.parquet"
+
+
+def write_part(out: Path, part: int, results: Sequence[dict], n_values: int) -> Path:
+    """Write one part atomically; ``results`` in row order, each with keys ``id``, ``row``,
+    ``values`` (shape (n_values,) or None), ``metadata``, ``error``, ``message``."""
+    pa = _pa()
+    import pyarrow.parquet as pq
+
+    schema = part_schema(n_values)
+    flat = [
+        np.zeros(n_values) if r["values"] is None else np.asarray(r["values"]) for r in results
+    ]
+    # Failed rows get a null entry; the zeros only fill the child array's slot, never read.
+    values = pa.FixedSizeListArray.from_arrays(
+        pa.array(np.concatenate(flat) if flat else np.zeros(0), pa.float64()),
+        n_values,
+        mask=pa.array([r["values"] is None for r in results], pa.bool_()),
+    )
+    columns = {name: [r[name] for r in results] for name in schema.names if name != "values"}
+    arrays = [
+        values if name == "values" else pa.array(columns[name], schema.field(name).type)
+        for name in schema.names
+    ]
+    table = pa.Table.from_arrays(arrays, schema=schema)
+    path = part_path(out, part)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temp = path.with_name(f"{path.name}{TEMP_MARK}{uuid.uuid4().hex}")
+    pq.write_table(table, temp, compression=COMPRESSION)
+    with open(temp, "rb") as handle:
+        os.fsync(handle.fileno())
+    os.replace(temp, path)
+    return path
+
+
+def read_part(out: Path, part: int, rows: Sequence[ManifestRow], n_values: int):
+    """A part's table if it is complete and belongs to these rows, else None."""
+    import pyarrow.parquet as pq
+
+    path = part_path(out, part)
+    if not path.exists():
+        return None
+    try:
+        table = pq.read_table(path)
+    except Exception:
+        return None
+    if not table.schema.equals(part_schema(n_values)) or table.num_rows != len(rows):
+        return None
+    if table.column("id").to_pylist() != [r.id for r in rows]:
+        return None
+    if table.column("row").to_pylist() != [r.index for r in rows]:
+        return None
+    return table
+
+
+# -- the consolidated output --------------------------------------------------------------------
+
+
+def consolidate(out: Path, n_parts: int, params: dict[str, Any]) -> tuple[int, int]:
+    """Join the parts in manifest order into ``descriptors.parquet`` and ``errors.jsonl``.
+
+    Returns
+    -------
+    (int, int)
+        Rows with a descriptor, rows that failed.
+    """
+    pa = _pa()
+    import pyarrow.compute as pc
+    import pyarrow.parquet as pq
+
+    n_values = params["n_paths"] * params["n_steps"]
+    fields = [f for f in part_schema(n_values) if f.name in ("id", "values", "metadata")]
+    schema = pa.schema(fields, metadata={"exactgrasp.batch": json.dumps(params, sort_keys=True)})
+    target = out / DESCRIPTORS_FILE
+    temp = target.with_name(f"{target.name}{TEMP_MARK}{uuid.uuid4().hex}")
+    done = failed = 0
+    error_lines = []
+    with pq.ParquetWriter(temp, schema, compression=COMPRESSION) as writer:
+        for part in range(n_parts):
+            table = pq.read_table(part_path(out, part))
+            ok = pc.is_null(table.column("error"))
+            good = table.filter(ok).select(schema.names)
+            if good.num_rows:
+                writer.write_table(good)
+            done += good.num_rows
+            bad = table.filter(pc.invert(ok)).select(["id", "row", "error", "message"])
+            for record in bad.to_pylist():
+                error_lines.append(json.dumps(record, sort_keys=True) + "\n")
+            failed += bad.num_rows
+    os.replace(temp, target)
+    write_atomic(out / ERRORS_FILE, "".join(error_lines).encode())
+    return done, failed
+
+
+def read_batch(out: str | os.PathLike) -> tuple[list[str], np.ndarray, list[dict]]:
+    """Read ``descriptors.parquet`` of a finished run.
+
+    Parameters
+    ----------
+    out : path-like
+        The run's output folder (or the ``descriptors.parquet`` file itself).
+
+    Returns
+    -------
+    ids : list of str, length n
+    values : numpy.ndarray, shape (n, n_paths, n_steps), float64
+        Intersection volume / hand volume, as `exactgrasp.Descriptor.values`.
+    metadata : list of dict, length n
+        Each descriptor's metadata (without the run-dependent ``seconds``).
+    """
+    import pyarrow.parquet as pq
+
+    path = Path(out)
+    path = path / DESCRIPTORS_FILE if path.is_dir() else path
+    table = pq.read_table(path)
+    params = json.loads(table.schema.metadata[b"exactgrasp.batch"])
+    shape = (table.num_rows, params["n_paths"], params["n_steps"])
+    values = table.column("values").combine_chunks().flatten().to_numpy(zero_copy_only=False)
+    metadata = [json.loads(m) for m in table.column("metadata").to_pylist()]
+    return table.column("id").to_pylist(), values.reshape(shape), metadata
