@@ -1,0 +1,162 @@
+"""Numba kernel of one face pair of the exact backend (see `_exact_kernels` for the method)."""
+
+from __future__ import annotations
+
+from numba import njit
+
+from exactgrasp.backends._exact_kernels import edge_triangle, orient, orient_bound
+
+
+@njit(cache=True, nogil=True)
+def _side(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
+    d, ok = orient(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound)
+    return (0 if not ok else (1 if d > 0 else -1)), d
+
+
+@njit(cache=True, nogil=True, inline="always")
+def pair(t, s, A, AV, B, BV, AD, AN, BD, BN, acnt, bcnt, arec, brec, nrec, P, sg, dt):
+    """Contribution of face pair (t of A, s of B); records edge crossings. Returns
+    (segment term, code) with code 0 no crossing, 1 crossing, 2 degenerate, 3 overflow."""
+    AF, ATE, ATO = A[1], A[4], A[5]
+    BF, BTE, BTO = B[1], B[4], B[5]
+    t0, t1, t2 = AF[t, 0], AF[t, 1], AF[t, 2]
+    s0, s1, s2 = BF[s, 0], BF[s, 1], BF[s, 2]
+    tax, tay, taz = AV[t0, 0], AV[t0, 1], AV[t0, 2]
+    tbx, tby, tbz = AV[t1, 0], AV[t1, 1], AV[t1, 2]
+    tcx, tcy, tcz = AV[t2, 0], AV[t2, 1], AV[t2, 2]
+    sax, say, saz = BV[s0, 0], BV[s0, 1], BV[s0, 2]
+    sbx, sby, sbz = BV[s1, 0], BV[s1, 1], BV[s1, 2]
+    scx, scy, scz = BV[s2, 0], BV[s2, 1], BV[s2, 2]
+    ext = max(tax, tbx, tcx, sax, sbx, scx) - min(tax, tbx, tcx, sax, sbx, scx)
+    ext = max(ext, max(tay, tby, tcy, say, sby, scy) - min(tay, tby, tcy, say, sby, scy))
+    ext = max(ext, max(taz, tbz, tcz, saz, sbz, scz) - min(taz, tbz, tcz, saz, sbz, scz))
+    bound = orient_bound(ext * (1.0 + 1e-12))
+    # Vertices of each face against the other's plane: a face wholly on one side is done.
+    for k in range(3):
+        v = AF[t, k]
+        sg[0, k], dt[0, k] = _side(
+            sax, say, saz, sbx, sby, sbz, scx, scy, scz, AV[v, 0], AV[v, 1], AV[v, 2], bound
+        )
+    if sg[0, 0] != 0 and sg[0, 0] == sg[0, 1] and sg[0, 1] == sg[0, 2]:
+        return 0.0, 0
+    for k in range(3):
+        v = BF[s, k]
+        sg[1, k], dt[1, k] = _side(
+            tax, tay, taz, tbx, tby, tbz, tcx, tcy, tcz, BV[v, 0], BV[v, 1], BV[v, 2], bound
+        )
+    if sg[1, 0] != 0 and sg[1, 0] == sg[1, 1] and sg[1, 1] == sg[1, 2]:
+        return 0.0, 0
+    cap = arec[0].shape[0]
+    npt = 0
+    for k in range(3):
+        k1 = (k + 1) % 3
+        u = AF[t, k]
+        v = AF[t, k1]
+        if sg[0, k] != 0 and sg[0, k] == sg[0, k1]:
+            continue
+        # Lower vertex index first, so that both faces of an edge evaluate the same thing.
+        if u > v:
+            u, v = v, u
+            ku, kv = k1, k
+        else:
+            ku, kv = k, k1
+        code, lam = edge_triangle(
+            AV[u, 0],
+            AV[u, 1],
+            AV[u, 2],
+            AV[v, 0],
+            AV[v, 1],
+            AV[v, 2],
+            sax,
+            say,
+            saz,
+            sbx,
+            sby,
+            sbz,
+            scx,
+            scy,
+            scz,
+            sg[0, ku],
+            dt[0, ku],
+            sg[0, kv],
+            dt[0, kv],
+            bound,
+        )
+        if code == 2:
+            return 0.0, 2
+        if code == 1:
+            if npt < 2:
+                for d in range(3):
+                    P[npt, d] = AV[u, d] + lam * (AV[v, d] - AV[u, d])
+            npt += 1
+            if ATO[t, k]:
+                if nrec[0] >= cap:
+                    return 0.0, 3
+                arec[0][nrec[0]] = ATE[t, k]
+                arec[1][nrec[0]] = lam
+                nrec[0] += 1
+                acnt[ATE[t, k]] += 1
+    for k in range(3):
+        k1 = (k + 1) % 3
+        u = BF[s, k]
+        v = BF[s, k1]
+        if sg[1, k] != 0 and sg[1, k] == sg[1, k1]:
+            continue
+        if u > v:
+            u, v = v, u
+            ku, kv = k1, k
+        else:
+            ku, kv = k, k1
+        code, lam = edge_triangle(
+            BV[u, 0],
+            BV[u, 1],
+            BV[u, 2],
+            BV[v, 0],
+            BV[v, 1],
+            BV[v, 2],
+            tax,
+            tay,
+            taz,
+            tbx,
+            tby,
+            tbz,
+            tcx,
+            tcy,
+            tcz,
+            sg[1, ku],
+            dt[1, ku],
+            sg[1, kv],
+            dt[1, kv],
+            bound,
+        )
+        if code == 2:
+            return 0.0, 2
+        if code == 1:
+            if npt < 2:
+                for d in range(3):
+                    P[npt, d] = BV[u, d] + lam * (BV[v, d] - BV[u, d])
+            npt += 1
+            if BTO[s, k]:
+                if nrec[1] >= cap:
+                    return 0.0, 3
+                brec[0][nrec[1]] = BTE[s, k]
+                brec[1][nrec[1]] = lam
+                nrec[1] += 1
+                bcnt[BTE[s, k]] += 1
+    if npt == 0:
+        return 0.0, 0
+    if npt != 2:
+        return 0.0, 2
+    # Direct p -> q along n_t x n_s: A ∩ B then lies to the left of the segment on face t.
+    cx = AN[t, 1] * BN[s, 2] - AN[t, 2] * BN[s, 1]
+    cy = AN[t, 2] * BN[s, 0] - AN[t, 0] * BN[s, 2]
+    cz = AN[t, 0] * BN[s, 1] - AN[t, 1] * BN[s, 0]
+    p = P[0]
+    q = P[1]
+    if (q[0] - p[0]) * cx + (q[1] - p[1]) * cy + (q[2] - p[2]) * cz < 0:
+        p, q = q, p
+    px = p[1] * q[2] - p[2] * q[1]
+    py = p[2] * q[0] - p[0] * q[2]
+    pz = p[0] * q[1] - p[1] * q[0]
+    dd = (AD[t, 0] - BD[s, 0]) * px + (AD[t, 1] - BD[s, 1]) * py + (AD[t, 2] - BD[s, 2]) * pz
+    return dd / 6.0, 1

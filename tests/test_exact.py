@@ -1,0 +1,287 @@
+"""Tests of the exact backend (`exactgrasp.backends.exact`)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+from scipy.spatial import ConvexHull, HalfspaceIntersection
+from scipy.spatial.transform import Rotation
+
+from exactgrasp.backends.exact import (
+    ExactBackend,
+    ExactIntersector,
+    agrees,
+    plain_volumes,
+)
+from exactgrasp.errors import BackendError, MeshError, MissingDependencyError
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+
+
+def box(lo, hi):
+    """Closed, outward-oriented box mesh."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    V = np.array(
+        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    )
+    F = ConvexHull(V).simplices
+    return orient_outward(V, F)
+
+
+def orient_outward(V, F):
+    """Flip hull triangles so that their normals point away from the centroid."""
+    F = np.array(F, np.int64)
+    c = V.mean(0)
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    flip = np.einsum("ij,ij->i", n, V[F[:, 0]] - c) < 0
+    F[flip] = F[flip][:, ::-1]
+    return V, F
+
+
+def hull(points):
+    points = np.asarray(points, float)
+    h = ConvexHull(points)
+    used = np.unique(h.simplices)
+    remap = np.full(len(points), -1)
+    remap[used] = np.arange(len(used))
+    return orient_outward(points[used], remap[h.simplices])
+
+
+def sphere(r, centre, subdivisions):
+    import trimesh
+
+    s = trimesh.creation.icosphere(subdivisions=subdivisions, radius=r)
+    return np.asarray(s.vertices) + centre, np.asarray(s.faces, np.int64)
+
+
+def rigid(rng, n, tmax=1.0):
+    P = np.tile(np.eye(4), (n, 1, 1))
+    P[:, :3, :3] = Rotation.random(n, random_state=rng).as_matrix()
+    P[:, :3, 3] = rng.uniform(-tmax, tmax, (n, 3))
+    return P
+
+
+def moved(V, P):
+    return V @ P[:3, :3].T + P[:3, 3]
+
+
+def halfspace_volume(Va, Vb):
+    """Volume of the intersection of two convex hulls with scipy only (independent check)."""
+    eqs = np.vstack([ConvexHull(Va).equations, ConvexHull(Vb).equations])
+    # Chebyshev centre: the point deepest inside both.
+    norm = np.linalg.norm(eqs[:, :3], axis=1)
+    res = linprog(
+        [0, 0, 0, -1],
+        A_ub=np.hstack([eqs[:, :3], norm[:, None]]),
+        b_ub=-eqs[:, 3],
+        bounds=[(None, None)] * 3 + [(0, None)],
+    )
+    if res.x[3] <= 1e-9:
+        return 0.0
+    pts = HalfspaceIntersection(eqs, res.x[:3]).intersections
+    return ConvexHull(pts).volume
+
+
+def test_boxes_match_analytic_overlap():
+    rng = np.random.default_rng(1)
+    for _ in range(4):
+        lo_a, lo_b = rng.uniform(-1, 0, 3), rng.uniform(-1, 0, 3)
+        hi_a, hi_b = lo_a + rng.uniform(0.5, 1.5, 3), lo_b + rng.uniform(0.5, 1.5, 3)
+        ex = ExactIntersector([box(lo_a, hi_a)], [box(lo_b, hi_b)], broadphase=None)
+        shifts = np.tile(np.eye(4), (5, 1, 1))
+        shifts[:, :3, 3] = rng.uniform(-1, 1, (5, 3))
+        got = ex.volumes(shifts)
+        for v, t in zip(got, shifts[:, :3, 3], strict=True):
+            overlap = np.minimum(hi_a, hi_b + t) - np.maximum(lo_a, lo_b + t)
+            want = np.prod(np.clip(overlap, 0, None))
+            assert abs(v - want) <= 1e-12 * max(want, 1.0)
+
+
+def test_coincident_faces_fall_back_to_the_boolean():
+    # Shared face planes make orientation signs zero: the pose is recomputed by manifold3d.
+    ex = ExactIntersector(
+        [box([0, 0, 0], [1, 1, 1])], [box([0, 0, 0], [1, 1, 1])], broadphase=None
+    )
+    P = np.tile(np.eye(4), (2, 1, 1))
+    P[1, :3, 3] = [0.5, 0, 0]
+    assert np.allclose(ex.volumes(P), [1.0, 0.5], rtol=1e-12, atol=0)
+    assert ex.stats["poses_boolean"] == 2
+
+
+def test_random_convex_polytopes_match_halfspace_intersection():
+    rng = np.random.default_rng(7)
+    for _ in range(6):
+        A = hull(rng.normal(size=(40, 3)))
+        B = hull(rng.normal(size=(30, 3)) * [1.5, 0.7, 1.0])
+        ex = ExactIntersector([A], [B], broadphase=None)
+        P = rigid(rng, 4, tmax=1.5)
+        got = ex.volumes(P)
+        assert ex.stats["poses_boolean"] == 0  # the certified fast path decided every pose
+        for v, p in zip(got, P, strict=True):
+            want = halfspace_volume(A[0], moved(B[0], p))
+            assert abs(v - want) <= 1e-9 * max(want, 1e-6 * ex.hand_volume)
+
+
+def test_two_spheres_converge_to_lens_formula():
+    r1, r2, d = 1.0, 0.8, 1.2
+    lens = (
+        np.pi
+        * (r1 + r2 - d) ** 2
+        * (d**2 + 2 * d * r2 - 3 * r2**2 + 2 * d * r1 + 6 * r1 * r2 - 3 * r1**2)
+        / (12 * d)
+    )
+    errors = []
+    for sub in (1, 2, 3, 4):
+        a = sphere(r1, [0, 0, 0], sub)
+        b = sphere(r2, [0, 0, 0], sub)
+        P = np.eye(4)
+        P[:3, :3] = Rotation.from_rotvec([0.1, 0.2, 0.3]).as_matrix()
+        P[:3, 3] = [d, 0, 0]
+        errors.append(abs(ExactIntersector([a], [b], broadphase=None).volumes(P) - lens) / lens)
+    assert all(e2 < e1 for e1, e2 in itertools.pairwise(errors))
+    assert errors[-1] < 5e-3
+
+
+def overlapping_hand():
+    """Two overlapping link boxes (overlap 0.5 x 1 x 1) and a wedge-shaped object."""
+    links = [box([0, 0, 0], [2, 1, 1]), box([1.5, 0, 0], [3, 1, 1])]
+    obj = hull(np.random.default_rng(3).normal(size=(25, 3)) * 0.8 + [1.7, 0.5, 0.5])
+    return links, [obj]
+
+
+def test_overlapping_links_count_once_and_match_plain_boolean():
+    links, objs = overlapping_hand()
+    ex = ExactIntersector(links, objs, broadphase=None)
+    assert ex.hand_volume == pytest.approx(3.0, rel=1e-12)
+    rng = np.random.default_rng(5)
+    P = rigid(rng, 6, tmax=0.3)
+    P[0] = np.eye(4)
+    got = ex.volumes(P)
+    ref = plain_volumes(links, objs, P)
+    assert agrees(got, ref, ex.hand_volume).all()
+    # Summing per-link booleans would count the overlap twice.
+    per_link = sum(plain_volumes([lk], objs, P[:1])[0] for lk in links)
+    assert per_link > got[0] + 1e-3
+
+
+def test_no_overlap_gives_exactly_zero():
+    links, objs = overlapping_hand()
+    P = np.eye(4)[None].repeat(2, 0)
+    P[:, :3, 3] = [[10.0, 0, 0], [0, 0.0, 6.0]]
+    for bp in (None, "coal", "fcl"):
+        ex = ExactIntersector(links, objs, broadphase=bp)
+        got = ex.volumes(P)
+        assert got.tolist() == [0.0, 0.0]
+    assert ex.stats["poses_culled"] == 2
+
+
+def test_culling_off_coal_fcl_and_n_jobs_give_identical_volumes():
+    links, objs = overlapping_hand()
+    rng = np.random.default_rng(11)
+    P = rigid(rng, 12, tmax=3.0)
+    results = {}
+    for bp in (None, "coal", "fcl"):
+        for jobs in (1, 2):
+            results[bp, jobs] = ExactIntersector(links, objs, broadphase=bp, n_jobs=jobs).volumes(
+                P
+            )
+    base = results[None, 1]
+    assert (base > 0).any() and (base == 0).any()
+    for v in results.values():
+        np.testing.assert_array_equal(v, base)
+
+
+def test_volumes_invariant_to_object_units_once_normalised():
+    links, objs = overlapping_hand()
+    rng = np.random.default_rng(2)
+    P = rigid(rng, 5, tmax=0.3)
+    base = ExactIntersector(links, objs, broadphase="coal").volumes(P)
+    s = 1000.0  # the same scene in millimetres instead of metres
+    Ps = P.copy()
+    Ps[:, :3, 3] *= s
+    mm = ExactIntersector(
+        [(V * s, F) for V, F in links], [(V * s, F) for V, F in objs], broadphase="coal"
+    ).volumes(Ps)
+    assert agrees(mm / s**3, base, 3.0).all()
+
+
+def test_result_shape_follows_poses():
+    links, objs = overlapping_hand()
+    P = rigid(np.random.default_rng(0), 6, tmax=0.3).reshape(2, 3, 4, 4)
+    ex = ExactIntersector(links, objs, broadphase=None)
+    assert ex.volumes(P).shape == (2, 3)
+    np.testing.assert_array_equal(ex.volumes(P).ravel(), ex.volumes(P.reshape(6, 4, 4)))
+
+
+def test_open_mesh_refused_with_repair_hint():
+    V, F = box([0, 0, 0], [1, 1, 1])
+    with pytest.raises(MeshError, match="repair=True"):
+        ExactIntersector([(V, F)], [(V, F[:-1])], broadphase=None)
+    with pytest.raises(MeshError, match="repair=True"):
+        plain_volumes([(V, F[:-2])], [(V, F)], np.eye(4))
+
+
+def test_backend_validates_parameters(monkeypatch):
+    with pytest.raises(BackendError, match="'coal', 'fcl' or None"):
+        ExactBackend(broadphase="bullet")
+    with pytest.raises(BackendError, match="n_jobs"):
+        ExactBackend(n_jobs=0)
+    with pytest.raises(BackendError, match="tuning"):
+        ExactBackend(voxel=3)
+    import sys
+
+    monkeypatch.setitem(sys.modules, "coal", None)  # makes `import coal` fail
+    with pytest.raises(MissingDependencyError, match="coal"):
+        ExactBackend(broadphase="coal")
+    assert ExactBackend(broadphase=None).params == {"broadphase": None, "n_jobs": 1}
+
+
+class _FakeGrasp:
+    def __init__(self, links, objs, key):
+        self.links, self.objs, self.geometry_key = links, objs, key
+        self.builds = 0
+
+    def canonical_hand_links(self):
+        self.builds += 1
+        return self.links
+
+    def canonical_object_bodies(self):
+        return self.objs
+
+
+def test_backend_caches_geometry_per_grasp():
+    links, objs = overlapping_hand()
+    grasp = _FakeGrasp(links, objs, "k1")
+    backend = ExactBackend(broadphase="fcl")
+    P = rigid(np.random.default_rng(4), 3, tmax=0.3)
+    first = backend.volumes(grasp, P)
+    second = backend.volumes(grasp, P)
+    assert grasp.builds == 1
+    np.testing.assert_array_equal(first, second)
+    assert agrees(first, plain_volumes(links, objs, P), 3.0).all()
+    with pytest.raises(BackendError, match="poses"):
+        backend.volumes(grasp, np.eye(3))
+
+
+@pytest.mark.skipif(
+    not (DATA / "barrett-grasps").is_dir(), reason="real Barrett data (../shared/data) not present"
+)
+def test_real_spray_bottle_grasp_matches_plain_boolean():
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    from exact import load_grasp, random_poses  # the benchmark's loader
+
+    links, objs = load_grasp(DATA / "barrett-grasps" / "noise" / "noise_grasp0.json")
+    P = random_poses(3, seed=0)
+    P[0] = np.eye(4)  # the grasp itself: a tiny penetration (~1e-6 of the hand)
+    ex = ExactIntersector(links, objs, broadphase="coal")
+    got = ex.volumes(P)
+    ref = plain_volumes(links, objs, P)
+    assert agrees(got, ref, ex.hand_volume).all()
+    assert json.dumps(ex.stats)  # serialisable, for the benchmark
