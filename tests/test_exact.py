@@ -285,3 +285,48 @@ def test_real_spray_bottle_grasp_matches_plain_boolean():
     ref = plain_volumes(links, objs, P)
     assert agrees(got, ref, ex.hand_volume).all()
     assert json.dumps(ex.stats)  # serialisable, for the benchmark
+
+
+def test_ray_status_agrees_with_winding_number():
+    """The exact point test used for shells with no classified vertex (`ray_status`)."""
+    from exactgrasp.backends._exact_geometry import build_grid
+    from exactgrasp.backends._exact_kernels import ray_status, winding_number
+
+    V, F = sphere(1.0, np.zeros(3), 2)
+    grid = build_grid(V, F, 0.25)
+    stamp = np.full(len(F), -1, np.int64)
+    rng = np.random.default_rng(4)
+    # Points in a shell around the surface, where cells are touched by it.
+    d = rng.normal(size=(400, 3))
+    pts = d / np.linalg.norm(d, axis=1)[:, None] * rng.uniform(0.8, 1.2, (400, 1))
+    got = np.array([ray_status(p, V, F, grid, stamp, k) for k, p in enumerate(pts)])
+    want = np.array([round(winding_number(p, V, F)) & 1 for p in pts])
+    np.testing.assert_array_equal(got, want)
+    assert 100 < want.sum() < 300
+    # A point on the surface (a vertex) has no certain status.
+    assert ray_status(V[0].copy(), V, F, grid, stamp, 10_000) == -1
+
+
+def test_small_shell_inside_object_surface_cells_matches_plain_boolean():
+    """A hand made of a large box and a tiny separate box just under the object's surface:
+    every vertex of the tiny shell lies in a cell the object's surface touches, so its status
+    comes from the exact point test, not from the grid."""
+    from exactgrasp.backends._exact_kernels import point_status
+
+    big = box([0, 0, 0], [2, 2, 2])
+    tiny = box([2.302, 0.905, 0.905], [2.312, 0.915, 0.915])
+    obj = sphere(0.6, np.array([2.9, 0.91, 0.91]), 4)
+    ex = ExactIntersector([big, tiny], [obj], broadphase=None)
+    status = [point_status(v, *ex._bgrid[:4]) for v in tiny[0]]
+    assert status == [-1] * 8
+    P = np.tile(np.eye(4), (4, 1, 1))
+    P[:, 0, 3] = [0.0, -0.004, 0.006, -0.35]
+    got = ex.volumes(P)
+    ref = plain_volumes([big, tiny], [obj], P)
+    assert agrees(got, ref, ex.hand_volume).all()
+    assert ex.stats["poses_boolean"] == 0
+    # Wholly inside the sphere at the first two poses, partly at the third.
+    assert got[0] == pytest.approx(1e-6, rel=1e-9)
+    assert got[1] == pytest.approx(1e-6, rel=1e-9)
+    assert 0 < got[2] < 1e-6
+    assert got[3] > 1e-3

@@ -116,9 +116,10 @@ def build_grid(V: np.ndarray, F: np.ndarray, cell: float) -> tuple:
     Returns
     -------
     tuple
-        ``(lo, h, n, status, cell_start, cell_tris)``: origin (3,), cell size, counts (3,),
-        status per flat cell (1 inside, 0 outside, -1 touched by the surface) and the faces
-        touching each cell in CSR form.
+        ``(lo, h, n, status, cell_start, cell_tris, table)``: origin (3,), cell size, counts
+        (3,), status per flat cell (1 inside, 0 outside, -1 touched by the surface), the faces
+        touching each cell in CSR form, and the summed-volume table ((n + 1) cells per axis,
+        flat) of the surface cells (see `_exact_kernels.surface_cells_in`).
     """
     from scipy import ndimage
 
@@ -157,4 +158,7 @@ def build_grid(V: np.ndarray, F: np.ndarray, cell: float) -> tuple:
             centre = lo + (np.array([i, j, k]) + 0.5) * cell
             inside = round(winding_number(centre, V, F)) & 1
         status[idx] = inside
-    return (lo, float(cell), n, status, cell_start, tris)
+    # Summed-volume table of the surface cells: how many a box of cells holds, in 8 reads.
+    table = np.zeros(tuple(n + 1), np.int64)
+    table[1:, 1:, 1:] = surface.reshape(tuple(n)).cumsum(0).cumsum(1).cumsum(2)
+    return (lo, float(cell), n, status, cell_start, tris, table.reshape(-1))

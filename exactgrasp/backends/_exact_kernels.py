@@ -232,6 +232,27 @@ def raster_triangles(V, F, lo, h, n, margin):
 
 
 @njit(cache=True, nogil=True)
+def surface_cells_in(table, n, rng):
+    """Number of surface cells in the box of cells ``rng`` (3, 2) (inclusive index ranges),
+    from the grid's summed-volume table (`build_grid`)."""
+    s1 = n[2] + 1
+    s0 = (n[1] + 1) * s1
+    a0, a1 = rng[0, 0] * s0, (rng[0, 1] + 1) * s0
+    b0, b1 = rng[1, 0] * s1, (rng[1, 1] + 1) * s1
+    c0, c1 = rng[2, 0], rng[2, 1] + 1
+    return (
+        table[a1 + b1 + c1]
+        - table[a0 + b1 + c1]
+        - table[a1 + b0 + c1]
+        - table[a1 + b1 + c0]
+        + table[a0 + b0 + c1]
+        + table[a0 + b1 + c0]
+        + table[a1 + b0 + c0]
+        - table[a0 + b0 + c0]
+    )
+
+
+@njit(cache=True, nogil=True)
 def point_status(x, lo, h, n, status):
     """Inside (1) / outside (0) from the grid's cell statuses; -1 when x is in a surface cell."""
     i = int(np.floor((x[0] - lo[0]) / h))
@@ -240,3 +261,74 @@ def point_status(x, lo, h, n, status):
     if i < 0 or j < 0 or k < 0 or i >= n[0] or j >= n[1] or k >= n[2]:
         return 0
     return status[(i * n[1] + j) * n[2] + k]
+
+
+@njit(cache=True, nogil=True)
+def ray_status(x, V, F, grid, fstamp, token):
+    """Inside (1) or outside (0) of point x against a closed mesh with its cell grid, exactly.
+
+    Walks from x's cell along +x in its row of cells to the first cell of known status, and
+    flips that status by the parity of the faces crossed by the segment from x to that cell's
+    centre (only faces listed in the cells walked can cross it). Every crossing is decided by
+    certified orientation signs; returns -1 when one is uncertain (x on or very near a face).
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (3,)
+        The point, in the mesh's frame.
+    V, F : numpy.ndarray
+        The mesh, shapes (n, 3) float64 and (m, 3) int64.
+    grid : tuple
+        `build_grid` of the mesh.
+    fstamp : numpy.ndarray, shape (m,), int64
+        Scratch space marking faces already tested; entries equal to `token` are skipped.
+    token : int
+        A value not yet used in `fstamp`.
+    """
+    lo, h, n, status, cs, ct = grid[0], grid[1], grid[2], grid[3], grid[4], grid[5]
+    i = int(np.floor((x[0] - lo[0]) / h))
+    j = int(np.floor((x[1] - lo[1]) / h))
+    k = int(np.floor((x[2] - lo[2]) / h))
+    if i < 0 or j < 0 or k < 0 or i >= n[0] or j >= n[1] or k >= n[2]:
+        return 0
+    end = i
+    known = -1
+    while end < n[0]:
+        known = status[(end * n[1] + j) * n[2] + k]
+        if known >= 0:
+            break
+        end += 1
+    if known < 0:
+        return -1
+    yx = lo[0] + (end + 0.5) * h
+    yy = lo[1] + (j + 0.5) * h
+    yz = lo[2] + (k + 0.5) * h
+    parity = 0
+    for ii in range(i, end):
+        c = (ii * n[1] + j) * n[2] + k
+        for q in range(cs[c], cs[c + 1]):
+            f = ct[q]
+            if fstamp[f] == token:
+                continue
+            fstamp[f] = token
+            a, b, d = V[F[f, 0]], V[F[f, 1]], V[F[f, 2]]
+            ext = 0.0
+            for ax in range(3):
+                y_ax = yx if ax == 0 else (yy if ax == 1 else yz)
+                hi = max(a[ax], b[ax], d[ax], x[ax], y_ax)
+                lo_ = min(a[ax], b[ax], d[ax], x[ax], y_ax)
+                ext = max(ext, hi - lo_)
+            bound = orient_bound(ext * (1.0 + 1e-12))
+            dp, okp = orient(a[0], a[1], a[2], b[0], b[1], b[2], d[0], d[1], d[2],
+                             x[0], x[1], x[2], bound)  # fmt: skip
+            dq, okq = orient(a[0], a[1], a[2], b[0], b[1], b[2], d[0], d[1], d[2],
+                             yx, yy, yz, bound)  # fmt: skip
+            sp = 0 if not okp else (1 if dp > 0 else -1)
+            sq = 0 if not okq else (1 if dq > 0 else -1)
+            code, _ = edge_triangle(x[0], x[1], x[2], yx, yy, yz, a[0], a[1], a[2],
+                                    b[0], b[1], b[2], d[0], d[1], d[2], sp, dp, sq, dq,
+                                    bound)  # fmt: skip
+            if code == _DEGENERATE:
+                return -1
+            parity ^= code
+    return known ^ parity

@@ -14,11 +14,15 @@ def _side(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def pair(t, s, A, AV, B, BV, AD, AN, BD, BN, acnt, bcnt, arec, brec, nrec, P, sg, dt):
+def pair(
+    t, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, AN, BD, BN, acnt, bcnt,
+    arec_e, arec_l, brec_e, brec_l, nrec, P, sg, dt,
+):  # fmt: skip
     """Contribution of face pair (t of A, s of B); records edge crossings. Returns
-    (segment term, code) with code 0 no crossing, 1 crossing, 2 degenerate, 3 overflow."""
-    AF, ATE, ATO = A[1], A[4], A[5]
-    BF, BTE, BTO = B[1], B[4], B[5]
+    (segment term, code) with code 0 no crossing, 1 crossing, 2 degenerate, 3 overflow.
+
+    Arrays come one by one, not in the mesh tuples: unpacking a tuple of arrays on every call
+    costs more than the pair test."""
     t0, t1, t2 = AF[t, 0], AF[t, 1], AF[t, 2]
     s0, s1, s2 = BF[s, 0], BF[s, 1], BF[s, 2]
     tax, tay, taz = AV[t0, 0], AV[t0, 1], AV[t0, 2]
@@ -46,7 +50,7 @@ def pair(t, s, A, AV, B, BV, AD, AN, BD, BN, acnt, bcnt, arec, brec, nrec, P, sg
         )
     if sg[1, 0] != 0 and sg[1, 0] == sg[1, 1] and sg[1, 1] == sg[1, 2]:
         return 0.0, 0
-    cap = arec[0].shape[0]
+    cap = arec_e.shape[0]
     npt = 0
     for k in range(3):
         k1 = (k + 1) % 3
@@ -92,8 +96,8 @@ def pair(t, s, A, AV, B, BV, AD, AN, BD, BN, acnt, bcnt, arec, brec, nrec, P, sg
             if ATO[t, k]:
                 if nrec[0] >= cap:
                     return 0.0, 3
-                arec[0][nrec[0]] = ATE[t, k]
-                arec[1][nrec[0]] = lam
+                arec_e[nrec[0]] = ATE[t, k]
+                arec_l[nrec[0]] = lam
                 nrec[0] += 1
                 acnt[ATE[t, k]] += 1
     for k in range(3):
@@ -139,8 +143,8 @@ def pair(t, s, A, AV, B, BV, AD, AN, BD, BN, acnt, bcnt, arec, brec, nrec, P, sg
             if BTO[s, k]:
                 if nrec[1] >= cap:
                     return 0.0, 3
-                brec[0][nrec[1]] = BTE[s, k]
-                brec[1][nrec[1]] = lam
+                brec_e[nrec[1]] = BTE[s, k]
+                brec_l[nrec[1]] = lam
                 nrec[1] += 1
                 bcnt[BTE[s, k]] += 1
     if npt == 0:

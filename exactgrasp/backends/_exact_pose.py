@@ -21,9 +21,10 @@ from exactgrasp.backends._exact_kernels import (
     edge_weight,
     face_terms,
     point_status,
+    ray_status,
+    surface_cells_in,
     tri_box,
     tri_cell_range,
-    winding_number,
 )
 from exactgrasp.backends._exact_pairs import pair
 
@@ -67,21 +68,28 @@ def _resolve(S, adj_start, adj_vert, adj_edge, cnt, queue):
 
 
 @njit(cache=True, nogil=True)
-def _edge_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre):
+def _edge_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, adj_start, adj_vert, adj_edge):
     """Σ_e W_e f_e over the edges of one mesh; returns (sum, consistent).
 
     ``Wpre`` holds precomputed weights (fixed mesh) or is empty (weights computed here).
-    Consistency: each edge's end statuses must differ by the parity of its crossings.
+    Consistency: each edge's end statuses must differ by the parity of its crossings. Only the
+    edges at inside vertices and the crossed edges are visited (an edge between two outside
+    vertices that nothing crosses adds nothing and is consistent), which checks every edge.
     """
     have = Wpre.shape[0] > 0
     total = 0.0
-    for e in range(E.shape[0]):
-        su = S[E[e, 0]]
-        c = cnt[e]
-        if S[E[e, 1]] != su ^ (c & 1):
-            return 0.0, False
-        if c == 0 and su == 1:
-            total += Wpre[e] if have else edge_weight(V, D, E, ET, e)
+    for u in range(S.shape[0]):
+        if S[u] != 1:
+            continue
+        for k in range(adj_start[u], adj_start[u + 1]):
+            e = adj_edge[k]
+            if cnt[e] != 0:
+                continue
+            w = adj_vert[k]
+            if S[w] != 1:
+                return 0.0, False
+            if u < w:
+                total += Wpre[e] if have else edge_weight(V, D, E, ET, e)
     if nrec == 0:
         return total, True
     order = np.argsort(rec_e[:nrec])
@@ -99,6 +107,8 @@ def _edge_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre):
                 m -= 1
             lam[m] = x
             j += 1
+        if S[E[e, 1]] != S[E[e, 0]] ^ ((j - i) & 1):
+            return 0.0, False
         inside = S[E[e, 0]] == 1
         frac = 0.0
         last = 0.0
@@ -115,164 +125,193 @@ def _edge_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _object_face(s, A, X, agrid, B, BV, BD, BN, W, margin, ptol):
-    """All terms of object face s against the hand: finds the hand faces it may cross through
-    the hand's cell grid and evaluates each pair. Returns (segment sum, crossings, pairs tried,
-    code)."""
-    AV, AF = A[0], A[1]
-    AD, AN, ABB, AP = X[0], X[1], X[2], X[3]
-    alo, ah, an, acs, act = agrid[0], agrid[1], agrid[2], agrid[4], agrid[5]
+def _crossings_on_line(p, q, r, dp, dq, dr, Dx, Dy, Dz, ext):
+    """Where triangle pqr meets a plane, projected on the direction (Dx, Dy, Dz) of that
+    plane's line with another plane: (lo, hi, error bound). dp, dq, dr are the vertices'
+    signed distances to the plane, all farther than the tolerance, not all of one sign."""
+    # The lone vertex (the one on its own side) and the two edges from it that cross.
+    if (dp > 0) == (dq > 0):
+        k, i, j, dk, di, dj = r, p, q, dr, dp, dq
+    elif (dp > 0) == (dr > 0):
+        k, i, j, dk, di, dj = q, p, r, dq, dp, dr
+    else:
+        k, i, j, dk, di, dj = p, q, r, dp, dq, dr
+    xk = Dx * k[0] + Dy * k[1] + Dz * k[2]
+    xi = Dx * i[0] + Dy * i[1] + Dz * i[2]
+    xj = Dx * j[0] + Dy * j[1] + Dz * j[2]
+    ai = abs(dk) + abs(di)
+    aj = abs(dk) + abs(dj)
+    a = xk + (xi - xk) * (abs(dk) / ai)
+    b = xk + (xj - xk) * (abs(dk) / aj)
+    # The crossing parameters err by about (error of the distances) / (ai or aj), which moves
+    # the points by up to ext times that; 1e-11 is far above double rounding here.
+    err = 1e-11 * (1.0 + ext / min(ai, aj))
+    return min(a, b), max(a, b), err
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _apart_on_line(t0, t1, t2, e0, e1, e2, s0, s1, s2, f0, f1, f2, ax, ay, az, bx, by, bz,
+                   ptol, gscale):  # fmt: skip
+    """Floating-point pre-test of a face pair whose planes both straddle: True only when the
+    two faces certainly do not meet, their crossing segments on the planes' common line being
+    apart by far more than rounding. Anything close, or a vertex near the other plane, is left
+    to the exact test (`pair`), so the pre-test never changes a result.
+
+    ``e*`` are the distances of t's vertices to s's plane and ``f*`` of s's to t's; (ax, ay,
+    az) and (bx, by, bz) the unit normals of t and s; ``gscale`` bounds every coordinate."""
+    if min(abs(e0), abs(e1), abs(e2), abs(f0), abs(f1), abs(f2)) <= ptol:
+        return False
+    Dx = ay * bz - az * by
+    Dy = az * bx - ax * bz
+    Dz = ax * by - ay * bx
+    ext = 0.0
+    for k in range(3):
+        hi = max(t0[k], t1[k], t2[k], s0[k], s1[k], s2[k])
+        lo = min(t0[k], t1[k], t2[k], s0[k], s1[k], s2[k])
+        ext = max(ext, hi - lo)
+    lo_t, hi_t, err_t = _crossings_on_line(t0, t1, t2, e0, e1, e2, Dx, Dy, Dz, ext)
+    lo_s, hi_s, err_s = _crossings_on_line(s0, s1, s2, f0, f1, f2, Dx, Dy, Dz, ext)
+    gap = max(lo_s - hi_t, lo_t - hi_s)
+    return gap > (err_t + err_s) * gscale
+
+
+@njit(cache=True, nogil=True)
+def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0):
+    """All terms of the object's faces against the hand: finds the hand faces each may cross
+    through the hand's cell grid and evaluates each pair. Returns (segment sum, crossings,
+    pairs tried, code); stops at the first degenerate pair or overflow.
+
+    The loop over faces lives here, not in the caller, so that the tuples are unpacked once
+    per pose: unpacking them per face cost more than the whole search."""
+    AV, AF, ATE, ATO = A[0], A[1], A[4], A[5]
+    BTE, BTO = B[4], B[5]
+    AD, AN, CBB, AP = X[0], X[1], X[6], X[3]
+    alo, ah, an, acs, act, atable = agrid[0], agrid[1], agrid[2], agrid[4], agrid[5], agrid[6]
     acnt, bcnt, arec, brec, nrec, stamp, P, sg, dt, rng, cellmark = W
+    arec_e, arec_l, brec_e, brec_l = arec[0], arec[1], brec[0], brec[1]
     BF = B[1]
     seg = 0.0
     ncross = 0
     npairs = 0
-    if not tri_cell_range(BV, BF, s, alo, ah, an, margin, rng):
-        return seg, ncross, npairs, OK
-    sa, sb, sc = BV[BF[s, 0]], BV[BF[s, 1]], BV[BF[s, 2]]
-    smax0 = max(sa[0], sb[0], sc[0]) + margin
-    smax1 = max(sa[1], sb[1], sc[1]) + margin
-    smax2 = max(sa[2], sb[2], sc[2]) + margin
-    smin0 = min(sa[0], sb[0], sc[0]) - margin
-    smin1 = min(sa[1], sb[1], sc[1]) - margin
-    smin2 = min(sa[2], sb[2], sc[2]) - margin
-    nrm = np.sqrt(BN[s, 0] ** 2 + BN[s, 1] ** 2 + BN[s, 2] ** 2)
-    inv = 1.0 / nrm if nrm > 0 else 0.0
-    nx, ny, nz = BN[s, 0] * inv, BN[s, 1] * inv, BN[s, 2] * inv
-    sd = nx * sa[0] + ny * sa[1] + nz * sa[2]
-    # Walk the columns along the normal's dominant axis d and visit only the cells the face's
-    # plane passes through (with a margin); the separating-axis test then decides.
-    d = 0
-    if abs(ny) > abs(nx):
-        d = 1
-    if abs(nz) > max(abs(nx), abs(ny)):
-        d = 2
-    a = (d + 1) % 3
-    b = (d + 2) % 3
-    nd = nx if d == 0 else (ny if d == 1 else nz)
-    na_ = nx if a == 0 else (ny if a == 1 else nz)
-    nb_ = nx if b == 0 else (ny if b == 1 else nz)
-    hh = 0.5 * ah + margin
-    for ia in range(rng[a, 0], rng[a, 1] + 1):
-        xa0 = alo[a] + ia * ah - margin
-        xa1 = xa0 + ah + 2 * margin
-        for ib in range(rng[b, 0], rng[b, 1] + 1):
-            d0, d1 = rng[d, 0], rng[d, 1]
-            if nrm > 0:
-                xb0 = alo[b] + ib * ah - margin
-                xb1 = xb0 + ah + 2 * margin
-                lo_ = 1e300
-                hi_ = -1e300
-                for xa in (xa0, xa1):
-                    for xb in (xb0, xb1):
-                        z = (sd - na_ * xa - nb_ * xb) / nd
-                        lo_ = min(lo_, z)
-                        hi_ = max(hi_, z)
-                slack = 1e-6 * ah
-                d0 = max(d0, int(np.floor((lo_ - slack - alo[d]) / ah)))
-                d1 = min(d1, int(np.floor((hi_ + slack - alo[d]) / ah)))
-            for id_ in range(d0, d1 + 1):
-                if d == 0:
-                    i0, i1, i2 = id_, ia, ib
-                elif d == 1:
-                    i0, i1, i2 = ib, id_, ia
-                else:
-                    i0, i1, i2 = ia, ib, id_
-                c = (i0 * an[1] + i1) * an[2] + i2
-                if acs[c] == acs[c + 1]:
-                    continue
-                if not tri_box(
-                    alo[0] + (i0 + 0.5) * ah,
-                    alo[1] + (i1 + 0.5) * ah,
-                    alo[2] + (i2 + 0.5) * ah,
-                    hh,
-                    sa,
-                    sb,
-                    sc,
-                ):
-                    continue
-                cellmark[c] = True
-                for q in range(acs[c], acs[c + 1]):
-                    ft = act[q]
-                    if stamp[ft] == s:
+    cen = np.empty(3)
+    for s in range(BF.shape[0]):
+        if not tri_cell_range(BV, BF, s, alo, ah, an, margin, rng):
+            continue
+        if surface_cells_in(atable, an, rng) == 0:
+            continue
+        sa, sb, sc = BV[BF[s, 0]], BV[BF[s, 1]], BV[BF[s, 2]]
+        smax0 = max(sa[0], sb[0], sc[0]) + margin
+        smax1 = max(sa[1], sb[1], sc[1]) + margin
+        smax2 = max(sa[2], sb[2], sc[2]) + margin
+        smin0 = min(sa[0], sb[0], sc[0]) - margin
+        smin1 = min(sa[1], sb[1], sc[1]) - margin
+        smin2 = min(sa[2], sb[2], sc[2]) - margin
+        nrm = np.sqrt(BN[s, 0] ** 2 + BN[s, 1] ** 2 + BN[s, 2] ** 2)
+        inv = 1.0 / nrm if nrm > 0 else 0.0
+        nx, ny, nz = BN[s, 0] * inv, BN[s, 1] * inv, BN[s, 2] * inv
+        sd = nx * sa[0] + ny * sa[1] + nz * sa[2]
+        # Walk the columns along the normal's dominant axis d and visit only the cells the face's
+        # plane passes through (with a margin); the separating-axis test then decides.
+        d = 0
+        if abs(ny) > abs(nx):
+            d = 1
+        if abs(nz) > max(abs(nx), abs(ny)):
+            d = 2
+        a = (d + 1) % 3
+        b = (d + 2) % 3
+        nd = nx if d == 0 else (ny if d == 1 else nz)
+        na_ = nx if a == 0 else (ny if a == 1 else nz)
+        nb_ = nx if b == 0 else (ny if b == 1 else nz)
+        hh = 0.5 * ah + margin
+        stride_a = an[1] * an[2] if a == 0 else (an[2] if a == 1 else 1)
+        stride_b = an[1] * an[2] if b == 0 else (an[2] if b == 1 else 1)
+        stride_d = an[1] * an[2] if d == 0 else (an[2] if d == 1 else 1)
+        # Over a column's cross-section (grown by the margin) the plane's coordinate along d
+        # spans its value at the centre plus or minus `spread`.
+        inv_nd = 1.0 / nd if nrm > 0 else 0.0
+        spread = (abs(na_) + abs(nb_)) * abs(inv_nd) * (0.5 * ah + margin)
+        slack = 1e-6 * ah
+        for ia in range(rng[a, 0], rng[a, 1] + 1):
+            cen[a] = alo[a] + (ia + 0.5) * ah
+            za = sd - na_ * cen[a]
+            for ib in range(rng[b, 0], rng[b, 1] + 1):
+                cen[b] = alo[b] + (ib + 0.5) * ah
+                d0, d1 = rng[d, 0], rng[d, 1]
+                if nrm > 0:
+                    z = (za - nb_ * cen[b]) * inv_nd
+                    d0 = max(d0, int(np.floor((z - spread - slack - alo[d]) / ah)))
+                    d1 = min(d1, int(np.floor((z + spread + slack - alo[d]) / ah)))
+                base = ia * stride_a + ib * stride_b
+                for id_ in range(d0, d1 + 1):
+                    c = base + id_ * stride_d
+                    if acs[c] == acs[c + 1]:
                         continue
-                    stamp[ft] = s
-                    if (
-                        ABB[ft, 0] > smax0
-                        or ABB[ft, 3] < smin0
-                        or ABB[ft, 1] > smax1
-                        or ABB[ft, 4] < smin1
-                        or ABB[ft, 2] > smax2
-                        or ABB[ft, 5] < smin2
-                    ):
+                    cen[d] = alo[d] + (id_ + 0.5) * ah
+                    if not tri_box(cen[0], cen[1], cen[2], hh, sa, sb, sc):
                         continue
-                    # Both faces against the other's plane in floating point, with a tolerance
-                    # far above rounding; the exact tests follow in _pair.
-                    v0, v1, v2 = AF[ft, 0], AF[ft, 1], AF[ft, 2]
-                    e0 = AV[v0, 0] * nx + AV[v0, 1] * ny + AV[v0, 2] * nz - sd
-                    e1 = AV[v1, 0] * nx + AV[v1, 1] * ny + AV[v1, 2] * nz - sd
-                    e2 = AV[v2, 0] * nx + AV[v2, 1] * ny + AV[v2, 2] * nz - sd
-                    if (e0 > ptol and e1 > ptol and e2 > ptol) or (
-                        e0 < -ptol and e1 < -ptol and e2 < -ptol
-                    ):
-                        continue
-                    e0 = sa[0] * AP[ft, 0] + sa[1] * AP[ft, 1] + sa[2] * AP[ft, 2] - AP[ft, 3]
-                    e1 = sb[0] * AP[ft, 0] + sb[1] * AP[ft, 1] + sb[2] * AP[ft, 2] - AP[ft, 3]
-                    e2 = sc[0] * AP[ft, 0] + sc[1] * AP[ft, 1] + sc[2] * AP[ft, 2] - AP[ft, 3]
-                    if (e0 > ptol and e1 > ptol and e2 > ptol) or (
-                        e0 < -ptol and e1 < -ptol and e2 < -ptol
-                    ):
-                        continue
-                    npairs += 1
-                    term, pc = pair(
-                        ft,
-                        s,
-                        A,
-                        AV,
-                        B,
-                        BV,
-                        AD,
-                        AN,
-                        BD,
-                        BN,
-                        acnt,
-                        bcnt,
-                        arec,
-                        brec,
-                        nrec,
-                        P,
-                        sg,
-                        dt,
-                    )
-                    if pc >= 2:
-                        return seg, ncross, npairs, (DEGENERATE if pc == 2 else OVERFLOW)
-                    seg += term
-                    ncross += pc
+                    cellmark[c] = True
+                    for q in range(acs[c], acs[c + 1]):
+                        if (
+                            CBB[q, 0] > smax0
+                            or CBB[q, 3] < smin0
+                            or CBB[q, 1] > smax1
+                            or CBB[q, 4] < smin1
+                            or CBB[q, 2] > smax2
+                            or CBB[q, 5] < smin2
+                        ):
+                            continue
+                        ft = act[q]
+                        if stamp[ft] == stamp0 + s:
+                            continue
+                        stamp[ft] = stamp0 + s
+                        # Both faces against the other's plane in floating point, with a tolerance
+                        # far above rounding; the exact tests follow in _pair.
+                        v0, v1, v2 = AF[ft, 0], AF[ft, 1], AF[ft, 2]
+                        e0 = AV[v0, 0] * nx + AV[v0, 1] * ny + AV[v0, 2] * nz - sd
+                        e1 = AV[v1, 0] * nx + AV[v1, 1] * ny + AV[v1, 2] * nz - sd
+                        e2 = AV[v2, 0] * nx + AV[v2, 1] * ny + AV[v2, 2] * nz - sd
+                        if (e0 > ptol and e1 > ptol and e2 > ptol) or (
+                            e0 < -ptol and e1 < -ptol and e2 < -ptol
+                        ):
+                            continue
+                        f0 = sa[0] * AP[ft, 0] + sa[1] * AP[ft, 1] + sa[2] * AP[ft, 2] - AP[ft, 3]
+                        f1 = sb[0] * AP[ft, 0] + sb[1] * AP[ft, 1] + sb[2] * AP[ft, 2] - AP[ft, 3]
+                        f2 = sc[0] * AP[ft, 0] + sc[1] * AP[ft, 1] + sc[2] * AP[ft, 2] - AP[ft, 3]
+                        if (f0 > ptol and f1 > ptol and f2 > ptol) or (
+                            f0 < -ptol and f1 < -ptol and f2 < -ptol
+                        ):
+                            continue
+                        if _apart_on_line(
+                            AV[v0], AV[v1], AV[v2], e0, e1, e2, sa, sb, sc, f0, f1, f2,
+                            AP[ft, 0], AP[ft, 1], AP[ft, 2], nx, ny, nz, ptol, gscale,
+                        ):  # fmt: skip
+                            continue
+                        npairs += 1
+                        term, pc = pair(
+                            ft, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, AN, BD, BN,
+                            acnt, bcnt, arec_e, arec_l, brec_e, brec_l, nrec, P, sg, dt,
+                        )  # fmt: skip
+                        if pc >= 2:
+                            return seg, ncross, npairs, (DEGENERATE if pc == 2 else OVERFLOW)
+                        seg += term
+                        ncross += pc
     return seg, ncross, npairs, OK
 
 
 @njit(cache=True, nogil=True)
-def _hand_status(AS, AV, R, t, bgrid, BV0, BF, u_only):
-    """Status of hand vertices against the object (in its own frame); u_only >= 0 does one
-    vertex with the winding number instead. Returns False when that number is uncertain."""
+def _hand_status(AS, AV, R, t, bgrid):
+    """Status of every hand vertex from the object's grid cells (moved into the object's own
+    frame): 1 inside, 0 outside, -1 in a cell the object's surface touches."""
     blo, bh, bn, bstat = bgrid[0], bgrid[1], bgrid[2], bgrid[3]
     xb = np.empty(3)
-    lo_, hi_ = (0, AV.shape[0]) if u_only < 0 else (u_only, u_only + 1)
-    for i in range(lo_, hi_):
+    for i in range(AV.shape[0]):
         for k in range(3):
             xb[k] = (
                 R[0, k] * (AV[i, 0] - t[0])
                 + R[1, k] * (AV[i, 1] - t[1])
                 + R[2, k] * (AV[i, 2] - t[2])
             )
-        if u_only < 0:
-            AS[i] = point_status(xb, blo, bh, bn, bstat)
-        else:
-            w = winding_number(xb, BV0, BF)
-            if abs(w - np.round(w)) > 0.1:
-                return False
-            AS[i] = int(np.round(w)) & 1
-    return True
+        AS[i] = point_status(xb, blo, bh, bn, bstat)
 
 
 @njit(cache=True, nogil=True)
@@ -305,6 +344,10 @@ def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
     stamp = np.full(AF.shape[0], -1, np.int64)
     cellmark = np.zeros(acs.shape[0] - 1, np.bool_)
     queue = np.empty(max(na, nb), np.int64)
+    xq = np.empty(3)
+    astamp = np.full(AF.shape[0], -1, np.int64)
+    bstamp = np.full(mb, -1, np.int64)
+    token = -1
     W = (
         acnt,
         bcnt,
@@ -322,6 +365,9 @@ def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
     margin = 1e-9 * ah
     # Plane distances below this may be sign-uncertain in floating point; far above rounding.
     ptol = 1e-9 * ah
+    # A bound on every coordinate (at least 1), for the pre-test's error bound.
+    amax = max(1.0, np.abs(AV).max())
+    nparts = (cell_rep >= 0).sum()
     for ip in range(poses.shape[0]):
         R = poses[ip, :3, :3]
         t = poses[ip, :3, 3]
@@ -329,42 +375,52 @@ def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
             for k in range(3):
                 BV[i, k] = R[k, 0] * BV0[i, 0] + R[k, 1] * BV0[i, 1] + R[k, 2] * BV0[i, 2] + t[k]
         face_terms(BV, BF, tiny, BD, BN)
-        _hand_status(AS, AV, R, t, bgrid, BV0, BF, -1)
+        gscale = max(amax, np.abs(BV).max())
+        _hand_status(AS, AV, R, t, bgrid)
         for i in range(nb):
             BS[i] = point_status(BV[i], alo, ah, an, astat)
-        acnt[:] = 0
-        bcnt[:] = 0
+        # Counters are cleared where the last pose set them; face stamps are unique per pose
+        # (ip * mb + s), so neither needs a pass over a whole mesh.
+        for k in range(nrec[0]):
+            acnt[arec[0][k]] = 0
+        for k in range(nrec[1]):
+            bcnt[brec[0][k]] = 0
         nrec[:] = 0
-        stamp[:] = -1
         cellmark[:] = False
-        seg = 0.0
-        code = OK
-        npairs = 0
-        ncross = 0
-        for s in range(mb):
-            term, nc, npr, code = _object_face(s, A, X, agrid, B, BV, BD, BN, W, margin, ptol)
-            seg += term
-            ncross += nc
-            npairs += npr
-            if code != OK:
-                break
+        seg, ncross, npairs, code = _object_faces(
+            A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, ip * mb
+        )
         if code == OK:
             u = _resolve(AS, A[6], A[7], A[8], acnt, queue)
             while u >= 0 and code == OK:
-                if not _hand_status(AS, AV, R, t, bgrid, BV0, BF, u):
+                # A component with no vertex of known status (a small shell wholly in cells
+                # the object's surface touches): one exact point test in the object's frame.
+                for k in range(3):
+                    xq[k] = (
+                        R[0, k] * (AV[u, 0] - t[0])
+                        + R[1, k] * (AV[u, 1] - t[1])
+                        + R[2, k] * (AV[u, 2] - t[2])
+                    )
+                token += 1
+                AS[u] = ray_status(xq, BV0, BF, bgrid, bstamp, token)
+                if AS[u] < 0:
                     code = DEGENERATE
                 u = _resolve(AS, A[6], A[7], A[8], acnt, queue)
         if code == OK:
             u = _resolve(BS, B[6], B[7], B[8], bcnt, queue)
             while u >= 0 and code == OK:
-                w = winding_number(BV[u], AV, AF)
-                if abs(w - np.round(w)) > 0.1:
+                token += 1
+                BS[u] = ray_status(BV[u], AV, AF, agrid, astamp, token)
+                if BS[u] < 0:
                     code = DEGENERATE
-                BS[u] = int(np.round(w)) & 1
                 u = _resolve(BS, B[6], B[7], B[8], bcnt, queue)
         if code == OK:
-            sa_, oka = _edge_sum(AV, AD, AE, AET, AS, acnt, arec[0], arec[1], nrec[0], X[5])
-            sb_, okb = _edge_sum(BV, BD, BE, BET, BS, bcnt, brec[0], brec[1], nrec[1], noW)
+            sa_, oka = _edge_sum(
+                AV, AD, AE, AET, AS, acnt, arec[0], arec[1], nrec[0], X[5], A[6], A[7], A[8]
+            )
+            sb_, okb = _edge_sum(
+                BV, BD, BE, BET, BS, bcnt, brec[0], brec[1], nrec[1], noW, B[6], B[7], B[8]
+            )
             if not (oka and okb):
                 code = DEGENERATE
             out[ip] = sa_ + sb_ + seg
@@ -382,4 +438,49 @@ def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
                 inside += 1
         stats[ip, STAT_CELLS_TOUCHED] = touched
         stats[ip, STAT_CELLS_INSIDE] = inside
-        stats[ip, STAT_CELLS_OUTSIDE] = (cell_rep >= 0).sum() - touched - inside
+        stats[ip, STAT_CELLS_OUTSIDE] = nparts - touched - inside
+
+
+@njit(cache=True, nogil=True)
+def _shell_straddles(V, comp, seen, R, t, inverse, grid):
+    """Whether some shell of mesh V (vertex -> shell `comp`) has a vertex in a cell wholly
+    inside the other mesh and one in a cell wholly outside it; the vertices move by x -> R x + t
+    (or by the inverse transform) into the frame of the other mesh's `grid`."""
+    lo, h, n, status = grid[0], grid[1], grid[2], grid[3]
+    seen[:] = False
+    x = np.empty(3)
+    for i in range(V.shape[0]):
+        for k in range(3):
+            if inverse:
+                x[k] = (
+                    R[0, k] * (V[i, 0] - t[0])
+                    + R[1, k] * (V[i, 1] - t[1])
+                    + R[2, k] * (V[i, 2] - t[2])
+                )
+            else:
+                x[k] = R[k, 0] * V[i, 0] + R[k, 1] * V[i, 1] + R[k, 2] * V[i, 2] + t[k]
+        st = point_status(x, lo, h, n, status)
+        if st < 0:
+            continue
+        seen[comp[i], st] = True
+        if seen[comp[i], 0] and seen[comp[i], 1]:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def surfaces_cross(poses, AV, acomp, ancomp, agrid, BV0, bcomp, bncomp, bgrid):
+    """Per pose, whether the moved object's surface certainly crosses the hand's: a connected
+    shell of either mesh has one vertex in a cell wholly inside the other mesh and another in
+    a cell wholly outside it. Such a pose can never be culled, so the broad phase is not asked
+    about it (False means "not known", not "apart")."""
+    out = np.zeros(poses.shape[0], np.bool_)
+    aseen = np.zeros((ancomp, 2), np.bool_)
+    bseen = np.zeros((bncomp, 2), np.bool_)
+    for ip in range(poses.shape[0]):
+        R = poses[ip, :3, :3]
+        t = poses[ip, :3, 3]
+        out[ip] = _shell_straddles(BV0, bcomp, bseen, R, t, False, agrid) or _shell_straddles(
+            AV, acomp, aseen, R, t, True, bgrid
+        )
+    return out

@@ -102,6 +102,17 @@ def plain_volumes(hand_links: list[Mesh], object_bodies: list[Mesh], poses) -> n
     return out.reshape(poses.shape[:-2])
 
 
+def _vertex_components(V: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, int]:
+    """Connected component of each vertex of a mesh with edges E (e, 2): (labels, count)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(V)
+    graph = coo_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(n, n))
+    count, labels = connected_components(graph, directed=False)
+    return labels.astype(np.int64), int(count)
+
+
 class _PoseCull:
     """Whole-pose test with a BVH library: is the moved object's surface far from the hand's?"""
 
@@ -240,11 +251,19 @@ class ExactIntersector:
             np.einsum("ij,ij->i", AD[ET[:, 0]] - AD[ET[:, 1]], np.cross(AV[E[:, 0]], AV[E[:, 1]]))
             / 6.0
         )
-        self._X = (AD, AN, ABB, AP, self._cell_reps(AV), AW)
+        # The bounding boxes again in the order of the grid's cell lists, so that the search
+        # reads them sequentially.
+        CBB = np.ascontiguousarray(ABB[self._agrid[5]])
+        self._X = (AD, AN, ABB, AP, self._cell_reps(AV), AW, CBB)
         # Surfaces farther apart than this are certainly disjoint whatever the BVH's rounding.
         self._gap = 1e-7 * scale
         self._cull = (
             None if broadphase is None else _PoseCull(broadphase, AV, AF, BV, BF, self._gap)
+        )
+        # Connected shells (vertex -> shell) of hand and object, for `kp.surfaces_cross`.
+        self._shells = (
+            _vertex_components(self._A[0], self._A[2]),
+            _vertex_components(self._B[0], self._B[2]),
         )
         self.broadphase = broadphase
         self.tuning = {
@@ -286,7 +305,14 @@ class ExactIntersector:
         stats = np.zeros((n, kp.N_STATS), np.int64)
         todo = np.ones(n, bool)
         if self._cull is not None:
-            for i, p in enumerate(poses):
+            # The BVH query costs more than the kernel where the surfaces plainly cross; ask
+            # it only about the other poses.
+            crossing = kp.surfaces_cross(
+                poses, self._A[0], *self._shells[0], self._agrid, self._B[0], *self._shells[1],
+                self._bgrid,
+            )  # fmt: skip
+            for i in np.flatnonzero(~crossing):
+                p = poses[i]
                 if self._cull.far(p):
                     out[i] = self._contained(p)
                     codes[i] = kp.CULLED
