@@ -5,6 +5,7 @@ the plain loop (one manifold3d boolean of the whole hand and the whole object pe
 in the same run on a subsample of poses, with the largest relative difference between the two.
 
     python benchmarks/exact.py [--poses-subsample 40] [--n-jobs 2] [--broadphase coal]
+                               [--json results.json]
 
 Needs ``../shared/data`` (relative to the repository); skips with a message when it is absent.
 """
@@ -22,75 +23,22 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / ".." / "shared" / "data"
 GRASPS = (
-    "barrett-grasps/noise/noise_grasp0.json",
+    "barrett-grasps/noise/spray_bottle_base.json",
     "barrett-grasps/grasps/obj5_sub4_grasp1_optimal0_target.json",
     "barrett-grasps/grasps/obj5_sub5_grasp5_optimal0_target.json",
 )
-#: The paper's frame: grasp centre at z = 0.08 + 0.085 / 2 in the hand frame, half-depth = 1.
-CENTRE = np.array([0.0, 0.0, 0.1225])
-SCALE = 2.0 / 0.085
 
 
-def load_grasp(path: Path) -> tuple[list, list]:
-    """Hand links and object of a grasp JSON file, in the canonical frame.
+def load_grasp(path: Path):
+    """A real grasp through the library's loaders: (grasp, hand links, object bodies).
 
-    Returns
-    -------
-    (links, bodies)
-        Lists of (V (n, 3) float64, F (m, 3) int64), canonical units.
+    Links and bodies are lists of (V (n, 3) float64, F (m, 3) int64) in the canonical frame
+    (the paper's: grasp centre at the origin, half-depth 1), as every backend sees them.
     """
-    import mujoco
-    import trimesh
+    from exactgrasp import Grasp
 
-    path = Path(path)
-    g = json.loads(path.read_text())
-    model = mujoco.MjModel.from_xml_path(str((path.parent / g["hand_model"]).resolve()))
-    data = mujoco.MjData(model)
-    for name, q in g["joints"].items():
-        data.qpos[model.jnt_qposadr[model.joint(name).id]] = q
-    mujoco.mj_kinematics(model, data)
-    links = []
-    for i in range(model.ngeom):
-        k = model.geom_dataid[i]
-        a, n = model.mesh_vertadr[k], model.mesh_vertnum[k]
-        fa, fn = model.mesh_faceadr[k], model.mesh_facenum[k]
-        V = model.mesh_vert[a : a + n].astype(np.float64)
-        V = V @ data.geom_xmat[i].reshape(3, 3).T + data.geom_xpos[i]
-        # MuJoCo splits vertices; merging restores closed shells.
-        mesh = trimesh.Trimesh(V, model.mesh_face[fa : fa + fn], process=True)
-        links.append(
-            ((np.asarray(mesh.vertices) - CENTRE) * SCALE, np.asarray(mesh.faces, np.int64))
-        )
-    obj = trimesh.load(path.parent / g["object"], force="mesh")
-    obj = trimesh.Trimesh(obj.vertices, obj.faces, process=True)
-    scale = {"mm": 1e-3, "m": 1.0}[g.get("object_units", "mm")]
-    T = np.asarray(g["object_pose_in_hand"], float)
-    V = (np.asarray(obj.vertices) * scale) @ T[:3, :3].T + T[:3, 3]
-    return links, [((V - CENTRE) * SCALE, np.asarray(obj.faces, np.int64))]
-
-
-def random_poses(n: int, seed: int = 0, tmax: float = 1.0, amax: float = np.pi) -> np.ndarray:
-    """Random rigid poses: rotation angle up to `amax`, translation up to `tmax` (canonical)."""
-    from scipy.spatial.transform import Rotation
-
-    rng = np.random.default_rng(seed)
-    axis = Rotation.random(n, random_state=rng).as_rotvec()
-    axis /= np.linalg.norm(axis, axis=1)[:, None]
-    P = np.tile(np.eye(4), (n, 1, 1))
-    P[:, :3, :3] = Rotation.from_rotvec(axis * rng.uniform(0, amax, n)[:, None]).as_matrix()
-    t = rng.normal(size=(n, 3))
-    P[:, :3, 3] = t * (rng.uniform(0, tmax, n) / np.linalg.norm(t, axis=1))[:, None]
-    return P
-
-
-def preset_poses() -> tuple[np.ndarray, str]:
-    """The balanced preset's poses, or random ones of the same count until it exists."""
-    try:
-        from exactgrasp.sampling import PathSampler
-
-        return np.asarray(PathSampler.preset("balanced").poses()), "balanced preset"
-    except Exception as exc:  # the sampler is written concurrently; say what was used
-        return random_poses(474 * 9, seed=1), f"random (474 x 9; preset unavailable: {exc!r})"
+    grasp = Grasp.from_file(path)
+    return grasp, grasp.canonical_hand_links(), grasp.canonical_object_bodies()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -109,15 +57,17 @@ def main(argv: list[str] | None = None) -> int:
         default=list(GRASPS),
         help="grasp JSON files relative to ../shared/data",
     )
+    ap.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
     args = ap.parse_args(argv)
     if not DATA.is_dir():
         print(f"skipped: real data not found at {DATA.resolve()} (../shared/data)")
         return 0
     sys.path.insert(0, str(ROOT))
     from exactgrasp.backends.exact import ExactIntersector, agrees, plain_volumes
+    from exactgrasp.sampling import PathSampler
 
-    poses, kind = preset_poses()
-    flat = poses.reshape(-1, 4, 4)
+    flat = PathSampler.preset("balanced").poses().reshape(-1, 4, 4)
+    kind = "balanced preset"
     print(
         f"poses: {kind}, {len(flat)} per descriptor; n_jobs={args.n_jobs}, "
         f"broadphase={args.broadphase}"
@@ -139,11 +89,12 @@ def main(argv: list[str] | None = None) -> int:
         "agree 1e-9",
     )
     rows = []
+    records = []
     sub = np.random.default_rng(0).choice(
         len(flat), min(args.poses_subsample, len(flat)), replace=False
     )
     for rel in args.grasps:
-        links, bodies = load_grasp(DATA / rel)
+        _, links, bodies = load_grasp(DATA / rel)
         t0 = time.perf_counter()
         ex = ExactIntersector(
             links,
@@ -162,6 +113,20 @@ def main(argv: list[str] | None = None) -> int:
         plain = (time.perf_counter() - t0) / len(sub)
         diff = np.abs(vol[sub] - ref) / np.maximum(np.abs(ref), 1e-300)
         parts = st["parts"] * st["poses"]
+        records.append(
+            {
+                "grasp": rel,
+                "seconds_per_descriptor": per_descr,
+                "build_seconds": build,
+                "plain_seconds_per_pose": plain,
+                "speedup": plain * len(flat) / per_descr,
+                "max_rel_diff": float(diff.max()),
+                "agree_1e9": bool(agrees(vol[sub], ref, ex.hand_volume).all()),
+                "n_jobs": args.n_jobs,
+                "broadphase": args.broadphase,
+                **{k: v for k, v in st.items() if k != "seconds"},
+            }
+        )
         rows.append(
             (
                 Path(rel).stem,
@@ -184,6 +149,8 @@ def main(argv: list[str] | None = None) -> int:
     print("  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True)))
     for r in rows:
         print("  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)))
+    if args.json:
+        args.json.write_text(json.dumps(records, indent=1))
     return 0
 
 
