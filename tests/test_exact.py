@@ -272,18 +272,20 @@ def test_backend_caches_geometry_per_grasp():
     not (DATA / "barrett-grasps").is_dir(), reason="real Barrett data (../shared/data) not present"
 )
 def test_real_spray_bottle_grasp_matches_plain_boolean():
-    import sys
+    from exactgrasp import Grasp, PathSampler
 
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-    from exact import load_grasp, random_poses  # the benchmark's loader
-
-    links, objs = load_grasp(DATA / "barrett-grasps" / "noise" / "noise_grasp0.json")
-    P = random_poses(3, seed=0)
-    P[0] = np.eye(4)  # the grasp itself: a tiny penetration (~1e-6 of the hand)
+    grasp = Grasp.from_file(DATA / "barrett-grasps" / "noise" / "spray_bottle_base.json")
+    links, objs = grasp.canonical_hand_links(), grasp.canonical_object_bodies()
+    poses = PathSampler.preset("balanced").poses().reshape(-1, 4, 4)
+    P = np.concatenate([np.eye(4)[None], poses[[5, 1000, 2500, 4000]]])
     ex = ExactIntersector(links, objs, broadphase="coal")
     got = ex.volumes(P)
     ref = plain_volumes(links, objs, P)
+    # The grasp itself penetrates by about 1e-6 of the hand; the path poses overlap deeply.
+    assert 0 < got[0] < 1e-5 * ex.hand_volume
+    assert (got[1:] > 1e-3 * ex.hand_volume).all()
     assert agrees(got, ref, ex.hand_volume).all()
+    assert ex.stats["poses_boolean"] == 0
     assert json.dumps(ex.stats)  # serialisable, for the benchmark
 
 

@@ -14,6 +14,50 @@ def _side(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _edges_through(
+    f, F, TE, TO, V, row, ax, ay, az, bx, by, bz, cx, cy, cz,
+    cnt, rec_e, rec_l, nrec, P, npt, sg, dt, bound,
+):  # fmt: skip
+    """The edges of face f (of mesh V, F, row `row` of `sg`/`dt`) that cross triangle abc of
+    the other mesh: each crossing point goes to P (the first two), and the edge's owning face
+    records the crossing (edge, parameter) once. Returns (points so far, code) with code 2 for
+    an uncertain sign and 3 for a full record buffer."""
+    cap = rec_e.shape[0]
+    for k in range(3):
+        k1 = (k + 1) % 3
+        u = F[f, k]
+        v = F[f, k1]
+        if sg[row, k] != 0 and sg[row, k] == sg[row, k1]:
+            continue
+        # Lower vertex index first, so that both faces of an edge evaluate the same thing.
+        if u > v:
+            u, v = v, u
+            ku, kv = k1, k
+        else:
+            ku, kv = k, k1
+        code, lam = edge_triangle(
+            V[u, 0], V[u, 1], V[u, 2], V[v, 0], V[v, 1], V[v, 2],
+            ax, ay, az, bx, by, bz, cx, cy, cz,
+            sg[row, ku], dt[row, ku], sg[row, kv], dt[row, kv], bound,
+        )  # fmt: skip
+        if code == 2:
+            return npt, 2
+        if code == 1:
+            if npt < 2:
+                for d in range(3):
+                    P[npt, d] = V[u, d] + lam * (V[v, d] - V[u, d])
+            npt += 1
+            if TO[f, k]:
+                if nrec[row] >= cap:
+                    return npt, 3
+                rec_e[nrec[row]] = TE[f, k]
+                rec_l[nrec[row]] = lam
+                nrec[row] += 1
+                cnt[TE[f, k]] += 1
+    return npt, 0
+
+
+@njit(cache=True, nogil=True, inline="always")
 def pair(
     t, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, AN, BD, BN, acnt, bcnt,
     arec_e, arec_l, brec_e, brec_l, nrec, P, sg, dt,
@@ -50,103 +94,18 @@ def pair(
         )
     if sg[1, 0] != 0 and sg[1, 0] == sg[1, 1] and sg[1, 1] == sg[1, 2]:
         return 0.0, 0
-    cap = arec_e.shape[0]
-    npt = 0
-    for k in range(3):
-        k1 = (k + 1) % 3
-        u = AF[t, k]
-        v = AF[t, k1]
-        if sg[0, k] != 0 and sg[0, k] == sg[0, k1]:
-            continue
-        # Lower vertex index first, so that both faces of an edge evaluate the same thing.
-        if u > v:
-            u, v = v, u
-            ku, kv = k1, k
-        else:
-            ku, kv = k, k1
-        code, lam = edge_triangle(
-            AV[u, 0],
-            AV[u, 1],
-            AV[u, 2],
-            AV[v, 0],
-            AV[v, 1],
-            AV[v, 2],
-            sax,
-            say,
-            saz,
-            sbx,
-            sby,
-            sbz,
-            scx,
-            scy,
-            scz,
-            sg[0, ku],
-            dt[0, ku],
-            sg[0, kv],
-            dt[0, kv],
-            bound,
-        )
-        if code == 2:
-            return 0.0, 2
-        if code == 1:
-            if npt < 2:
-                for d in range(3):
-                    P[npt, d] = AV[u, d] + lam * (AV[v, d] - AV[u, d])
-            npt += 1
-            if ATO[t, k]:
-                if nrec[0] >= cap:
-                    return 0.0, 3
-                arec_e[nrec[0]] = ATE[t, k]
-                arec_l[nrec[0]] = lam
-                nrec[0] += 1
-                acnt[ATE[t, k]] += 1
-    for k in range(3):
-        k1 = (k + 1) % 3
-        u = BF[s, k]
-        v = BF[s, k1]
-        if sg[1, k] != 0 and sg[1, k] == sg[1, k1]:
-            continue
-        if u > v:
-            u, v = v, u
-            ku, kv = k1, k
-        else:
-            ku, kv = k, k1
-        code, lam = edge_triangle(
-            BV[u, 0],
-            BV[u, 1],
-            BV[u, 2],
-            BV[v, 0],
-            BV[v, 1],
-            BV[v, 2],
-            tax,
-            tay,
-            taz,
-            tbx,
-            tby,
-            tbz,
-            tcx,
-            tcy,
-            tcz,
-            sg[1, ku],
-            dt[1, ku],
-            sg[1, kv],
-            dt[1, kv],
-            bound,
-        )
-        if code == 2:
-            return 0.0, 2
-        if code == 1:
-            if npt < 2:
-                for d in range(3):
-                    P[npt, d] = BV[u, d] + lam * (BV[v, d] - BV[u, d])
-            npt += 1
-            if BTO[s, k]:
-                if nrec[1] >= cap:
-                    return 0.0, 3
-                brec_e[nrec[1]] = BTE[s, k]
-                brec_l[nrec[1]] = lam
-                nrec[1] += 1
-                bcnt[BTE[s, k]] += 1
+    npt, code = _edges_through(
+        t, AF, ATE, ATO, AV, 0, sax, say, saz, sbx, sby, sbz, scx, scy, scz,
+        acnt, arec_e, arec_l, nrec, P, 0, sg, dt, bound,
+    )  # fmt: skip
+    if code >= 2:
+        return 0.0, code
+    npt, code = _edges_through(
+        s, BF, BTE, BTO, BV, 1, tax, tay, taz, tbx, tby, tbz, tcx, tcy, tcz,
+        bcnt, brec_e, brec_l, nrec, P, npt, sg, dt, bound,
+    )  # fmt: skip
+    if code >= 2:
+        return 0.0, code
     if npt == 0:
         return 0.0, 0
     if npt != 2:
