@@ -332,3 +332,21 @@ def test_small_shell_inside_object_surface_cells_matches_plain_boolean():
     assert got[1] == pytest.approx(1e-6, rel=1e-9)
     assert 0 < got[2] < 1e-6
     assert got[3] > 1e-3
+
+
+def test_surfaces_cross_is_certain_and_keeps_culling_unchanged():
+    """The kernel's cheap test that spares the BVH query: True only where surfaces cross."""
+    from exactgrasp.backends import _exact_pose as kp
+
+    links, objs = overlapping_hand()
+    ex = ExactIntersector(links, objs, broadphase="coal")
+    P = np.tile(np.eye(4), (3, 1, 1))
+    P[1, :3, 3] = [10.0, 0.0, 0.0]  # far away: not known to cross, left to the broad phase
+    P[2, :3, 3] = [-1.7, -0.5, -0.5]  # the object's centre near the hand's corner
+    crossing = kp.surfaces_cross(
+        P, ex._A[0], *ex._shells[0], ex._agrid, ex._B[0], *ex._shells[1], ex._bgrid
+    )
+    assert crossing.tolist() == [True, False, True]
+    got = ex.volumes(P)
+    assert got[1] == 0.0 and ex.stats["poses_culled"] == 1
+    np.testing.assert_array_equal(got, ExactIntersector(links, objs, broadphase=None).volumes(P))
