@@ -128,12 +128,15 @@ class ValidationConfig:
 
     @classmethod
     def paper(cls, **overrides: Any) -> ValidationConfig:
-        """The paper's sizes everywhere, with both backends (hours on two cores)."""
+        """The paper's sizes everywhere, with both backends (the committed report).
+
+        About 40 minutes on two cores.
+        """
         return cls(**overrides)
 
     @classmethod
     def standard(cls, **overrides: Any) -> ValidationConfig:
-        """The committed report (about 40 minutes on two cores).
+        """Fewer grasps and exact draws (about 20 minutes on two cores).
 
         The estimator report uses the balanced preset on 12 cereal-box grasps, the spray
         bottle and one closed grasp on each of 7 other objects. The noise tests keep the

@@ -96,7 +96,7 @@ def run_validation(
         The shared data folder (``barrett-grasps/`` and ``osu-objects/``).
     out_dir : path-like
     config : ValidationConfig, optional
-        Default: `ValidationConfig.standard`.
+        Default: `ValidationConfig.paper`.
     cache_dir : path-like, optional
         Descriptor and closing cache (default ``out_dir/cache``).
     command : str
@@ -109,7 +109,7 @@ def run_validation(
         The summary written to ``summary.json``.
     """
     start = time.perf_counter()
-    config = config or ValidationConfig.standard()
+    config = config or ValidationConfig.paper()
     barrett = barrett_dir(data_dir)
     out = Path(out_dir)
     figures_dir = out / "figures"
