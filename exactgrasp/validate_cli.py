@@ -61,8 +61,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         default="paper",
         choices=["paper", "standard", "quick"],
         help="paper (default, the committed report: the paper's sizes everywhere with both "
-        "backends, about 40 min on 2 cores), standard (fewer grasps and exact draws, about "
-        "20 min), quick (about a minute)",
+        "backends, about 36 min on 2 cores), standard (fewer grasps and exact draws, about "
+        "13 min), quick (under a minute)",
     )
     parser.add_argument("--quick", action="store_true", help="the same as --size quick")
     parser.add_argument(

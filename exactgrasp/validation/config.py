@@ -42,9 +42,9 @@ def _samplers() -> dict[str, dict[str, Any]]:
 class ValidationConfig:
     """Sizes and settings of a validation run.
 
-    Three sizes: `paper` (the paper's sizes everywhere, both backends; hours on two cores),
-    `standard` (the committed report: the paper's sizes except where the exact backend would
-    take too long, about 40 minutes on two cores) and `quick` (under a minute, for the tests).
+    Three sizes: `paper` (the committed report and the default: the paper's sizes everywhere,
+    both backends; about 36 minutes on two cores), `standard` (fewer grasps, exact joint-noise
+    draws and exact presets; about 13 minutes) and `quick` (under a minute, for the tests).
 
     Attributes
     ----------
@@ -130,13 +130,13 @@ class ValidationConfig:
     def paper(cls, **overrides: Any) -> ValidationConfig:
         """The paper's sizes everywhere, with both backends (the committed report).
 
-        About 40 minutes on two cores.
+        About 36 minutes on two cores.
         """
         return cls(**overrides)
 
     @classmethod
     def standard(cls, **overrides: Any) -> ValidationConfig:
-        """Fewer grasps and exact draws (about 20 minutes on two cores).
+        """Fewer grasps and exact draws (about 13 minutes on two cores).
 
         The estimator report uses the balanced preset on 12 cereal-box grasps, the spray
         bottle and one closed grasp on each of 7 other objects. The noise tests keep the
