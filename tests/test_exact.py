@@ -17,6 +17,7 @@ from exactgrasp.backends.exact import (
     ExactIntersector,
     agrees,
     plain_volumes,
+    repeated_poses,
 )
 from exactgrasp.errors import BackendError, MeshError, MissingDependencyError
 
@@ -194,6 +195,34 @@ def test_culling_off_coal_fcl_and_n_jobs_give_identical_volumes():
     assert (base > 0).any() and (base == 0).any()
     for v in results.values():
         np.testing.assert_array_equal(v, base)
+
+
+def test_poses_equal_to_rounding_are_computed_once():
+    links, objs = overlapping_hand()
+    rng = np.random.default_rng(3)
+    P = rigid(rng, 4, tmax=0.3)
+    # A rotation by a about w is a rotation by -a about -w: equal up to rounding.
+    w, a = np.array([0.2, -0.5, 0.84]), 0.7
+    w /= np.linalg.norm(w)
+    P[2, :3, :3] = Rotation.from_rotvec(a * w).as_matrix()
+    P[3, :3, :3] = Rotation.from_rotvec(-a * -w).as_matrix()
+    P[3, :3, 3] = P[2, :3, 3]
+    one_ulp = P[0].copy()
+    one_ulp[0, 3] = np.nextafter(one_ulp[0, 3], np.inf)
+    far = P[0].copy()
+    far[0, 3] += 1e-12  # thousands of ulps: a different pose
+    poses = np.concatenate([P, P[:1], one_ulp[None], far[None]])
+    assert repeated_poses(poses).tolist()[4:] == [0, 0, 6]
+    assert repeated_poses(poses)[3] in (2, 3)
+    ex = ExactIntersector(links, objs, broadphase=None)
+    got = ex.volumes(poses)
+    assert ex.stats["poses"] == 7
+    assert ex.stats["poses_repeated"] == 2 + (repeated_poses(poses)[3] == 2)
+    alone = np.array([ex.volumes(p[None])[0] for p in poses])
+    assert agrees(got, alone, ex.hand_volume, rtol=1e-12).all()
+    assert got[4] == got[0] and got[5] == got[0]
+    ref = plain_volumes(links, objs, poses)
+    assert agrees(got, ref, ex.hand_volume).all()
 
 
 def test_volumes_invariant_to_object_units_once_normalised():

@@ -32,7 +32,7 @@ from numba import njit
 _ORIENT_ERR = 1e-14
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def orient_bound(extent):
     """Error bound of `orient` for points whose coordinates span at most `extent`."""
     return _ORIENT_ERR * extent * extent * extent
@@ -41,7 +41,7 @@ def orient_bound(extent):
 _NO, _CROSS, _DEGENERATE = 0, 1, 2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def orient(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
     """Six times the signed volume of tetrahedron abcd, and whether its sign is certain.
 
@@ -61,7 +61,7 @@ def orient(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
     return det, abs(det) > bound
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def edge_triangle(
     px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz, sp, s1, sq, s2, bound
 ):
@@ -84,7 +84,7 @@ def edge_triangle(
     return _CROSS, s1 / (s1 - s2)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def face_terms(V, F, tiny, D, N):
     """Fill per face normal ``N`` (unnormalised) and ``D = (N·a) N / |N|²``, shapes (m, 3).
 
@@ -111,7 +111,7 @@ def face_terms(V, F, tiny, D, N):
             D[f, 2] = s * n2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def edge_weight(V, D, E, ET, e):
     """``W_e = (D_t1 − D_t2) · (u × v) / 6`` for edge e."""
     u = V[E[e, 0]]
@@ -126,7 +126,7 @@ def edge_weight(V, D, E, ET, e):
     ) / 6.0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def winding_number(x, V, F):
     """Generalised winding number of point x with respect to a closed mesh (not rounded)."""
     total = 0.0
@@ -145,7 +145,7 @@ def winding_number(x, V, F):
     return total / (4.0 * np.pi)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _sep(ax, ay, az, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh):
     """Is axis (ax, ay, az) separating a triangle and the cube [-hh, hh]^3?"""
     p0 = ax * x0 + ay * y0 + az * z0
@@ -155,7 +155,7 @@ def _sep(ax, ay, az, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh):
     return min(p0, p1, p2) > r or max(p0, p1, p2) < -r
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def tri_box(cx, cy, cz, hh, a, b, c):
     """Separating-axis test: does triangle abc touch the cube of half-size hh at (cx, cy, cz)?"""
     x0, y0, z0 = a[0] - cx, a[1] - cy, a[2] - cz
@@ -188,7 +188,7 @@ def tri_box(cx, cy, cz, hh, a, b, c):
     return not _sep(nx, ny, nz, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def tri_cell_range(V, F, f, lo, h, n, margin, rng):
     """Grid-index range of triangle f's bounding box (clipped); False when outside the grid."""
     for ax in range(3):
@@ -203,7 +203,7 @@ def tri_cell_range(V, F, f, lo, h, n, margin, rng):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def raster_triangles(V, F, lo, h, n, margin):
     """(cell, triangle) pairs of every triangle touching a grid cell (closed, grown by margin).
 
@@ -231,7 +231,7 @@ def raster_triangles(V, F, lo, h, n, margin):
     return c[order], t[order]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def surface_cells_in(table, n, rng):
     """Number of surface cells in the box of cells ``rng`` (3, 2) (inclusive index ranges),
     from the grid's summed-volume table (`build_grid`)."""
@@ -252,7 +252,7 @@ def surface_cells_in(table, n, rng):
     )
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def point_status(x, lo, h, n, status):
     """Inside (1) / outside (0) from the grid's cell statuses; -1 when x is in a surface cell."""
     i = int(np.floor((x[0] - lo[0]) / h))
@@ -263,7 +263,7 @@ def point_status(x, lo, h, n, status):
     return status[(i * n[1] + j) * n[2] + k]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def ray_status(x, V, F, grid, fstamp, token):
     """Inside (1) or outside (0) of point x against a closed mesh with its cell grid, exactly.
 

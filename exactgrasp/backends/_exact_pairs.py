@@ -7,13 +7,13 @@ from numba import njit
 from exactgrasp.backends._exact_kernels import edge_triangle, orient, orient_bound
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _side(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
     d, ok = orient(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound)
     return (0 if not ok else (1 if d > 0 else -1)), d
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _edges_through(
     f, F, TE, TO, V, row, ax, ay, az, bx, by, bz, cx, cy, cz,
     cnt, rec_e, rec_l, nrec, P, npt, sg, dt, bound,
@@ -57,7 +57,7 @@ def _edges_through(
     return npt, 0
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def pair(
     t, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, AN, BD, BN, acnt, bcnt,
     arec_e, arec_l, brec_e, brec_l, nrec, P, sg, dt,

@@ -28,6 +28,8 @@ from exactgrasp.backends._exact_kernels import (
 )
 from exactgrasp.backends._exact_pairs import pair
 
+#: Object faces are first tested in runs of this many consecutive faces (see `_near_chunks`).
+CHUNK = 16
 #: Per-pose result codes.
 OK, CULLED, DEGENERATE, OVERFLOW = 0, 1, 2, 3
 #: Columns of the per-pose statistics array.
@@ -35,7 +37,33 @@ STAT_PAIRS, STAT_CROSSING, STAT_CELLS_TOUCHED, STAT_CELLS_INSIDE, STAT_CELLS_OUT
 N_STATS = 5
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
+def _spread(S, adj_start, adj_vert, adj_edge, cnt, queue, tail):
+    """Breadth-first from the ``tail`` vertices in ``queue``: every unknown (-1) neighbour
+    takes the status of the vertex it is reached from, flipped by the parity of the crossings
+    on the edge between them."""
+    head = 0
+    while head < tail:
+        u = queue[head]
+        head += 1
+        for k in range(adj_start[u], adj_start[u + 1]):
+            w = adj_vert[k]
+            if S[w] == -1:
+                S[w] = S[u] ^ (cnt[adj_edge[k]] & 1)
+                queue[tail] = w
+                tail += 1
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _next_unknown(S, start):
+    """The first vertex at or after ``start`` whose status is unknown (-1), or -1."""
+    for u in range(start, S.shape[0]):
+        if S[u] == -1:
+            return u
+    return -1
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def _resolve(S, adj_start, adj_vert, adj_edge, cnt, queue):
     """Give every vertex of unknown status (-1) the status of a neighbour, flipped by the
     parity of the crossings on the edge between them. Returns the first vertex still unknown
@@ -51,23 +79,11 @@ def _resolve(S, adj_start, adj_vert, adj_edge, cnt, queue):
                 queue[tail] = u
                 tail += 1
                 break
-    head = 0
-    while head < tail:
-        u = queue[head]
-        head += 1
-        for k in range(adj_start[u], adj_start[u + 1]):
-            w = adj_vert[k]
-            if S[w] == -1:
-                S[w] = S[u] ^ (cnt[adj_edge[k]] & 1)
-                queue[tail] = w
-                tail += 1
-    for u in range(S.shape[0]):
-        if S[u] == -1:
-            return u
-    return -1
+    _spread(S, adj_start, adj_vert, adj_edge, cnt, queue, tail)
+    return _next_unknown(S, 0)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _edge_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, adj_start, adj_vert, adj_edge):
     """Σ_e W_e f_e over the edges of one mesh; returns (sum, consistent).
 
@@ -124,7 +140,7 @@ def _edge_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, adj_start, adj_vert
     return total, True
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _crossings_on_line(p, q, r, dp, dq, dr, Dx, Dy, Dz, ext):
     """Where triangle pqr meets a plane, projected on the direction (Dx, Dy, Dz) of that
     plane's line with another plane: (lo, hi, error bound). dp, dq, dr are the vertices'
@@ -149,7 +165,7 @@ def _crossings_on_line(p, q, r, dp, dq, dr, Dx, Dy, Dz, ext):
     return min(a, b), max(a, b), err
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _apart_on_line(t0, t1, t2, e0, e1, e2, s0, s1, s2, f0, f1, f2, ax, ay, az, bx, by, bz,
                    ptol, gscale):  # fmt: skip
     """Floating-point pre-test of a face pair whose planes both straddle: True only when the
@@ -175,8 +191,8 @@ def _apart_on_line(t0, t1, t2, e0, e1, e2, s0, s1, s2, f0, f1, f2, ax, ay, az, b
     return gap > (err_t + err_s) * gscale
 
 
-@njit(cache=True, nogil=True)
-def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0):
+@njit(cache=True, nogil=True, error_model="numpy")
+def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, near):
     """All terms of the object's faces against the hand: finds the hand faces each may cross
     through the hand's cell grid and evaluates each pair. Returns (segment sum, crossings,
     pairs tried, code); stops at the first degenerate pair or overflow.
@@ -185,7 +201,7 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0):
     per pose: unpacking them per face cost more than the whole search."""
     AV, AF, ATE, ATO = A[0], A[1], A[4], A[5]
     BTE, BTO = B[4], B[5]
-    AD, AN, CBB, AP = X[0], X[1], X[6], X[3]
+    AD, AN, CBB, AP, nxt, PT = X[0], X[1], X[6], X[3], X[7], X[8]
     alo, ah, an, acs, act, atable = agrid[0], agrid[1], agrid[2], agrid[4], agrid[5], agrid[6]
     acnt, bcnt, arec, brec, nrec, stamp, P, sg, dt, rng, cellmark = W
     arec_e, arec_l, brec_e, brec_l = arec[0], arec[1], brec[0], brec[1]
@@ -195,6 +211,8 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0):
     npairs = 0
     cen = np.empty(3)
     for s in range(BF.shape[0]):
+        if not near[s // CHUNK]:
+            continue
         if not tri_cell_range(BV, BF, s, alo, ah, an, margin, rng):
             continue
         if surface_cells_in(atable, an, rng) == 0:
@@ -242,14 +260,45 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0):
                     d0 = max(d0, int(np.floor((z - spread - slack - alo[d]) / ah)))
                     d1 = min(d1, int(np.floor((z + spread + slack - alo[d]) / ah)))
                 base = ia * stride_a + ib * stride_b
-                for id_ in range(d0, d1 + 1):
-                    c = base + id_ * stride_d
-                    if acs[c] == acs[c + 1]:
-                        continue
-                    cen[d] = alo[d] + (id_ + 0.5) * ah
+                # Only the cells holding hand faces: `nxt` jumps to the next one along d.
+                cur = nxt[d, base + d0 * stride_d] if d0 <= d1 else an[d]
+                while cur <= d1:
+                    c = base + cur * stride_d
+                    cen[d] = alo[d] + (cur + 0.5) * ah
+                    cur = nxt[d, c + stride_d] if cur + 1 < an[d] else an[d]
                     if not tri_box(cen[0], cen[1], cen[2], hh, sa, sb, sc):
                         continue
                     cellmark[c] = True
+                    # Separating axes between the face and everything listed in the cell: the
+                    # listed faces' mean normal (a thin slab where the hand's surface is nearly
+                    # flat), then the face's own normal and the coordinate axes against the
+                    # listed faces' common bounding box.
+                    pa0 = PT[c, 0] * sa[0] + PT[c, 1] * sa[1] + PT[c, 2] * sa[2]
+                    pa1 = PT[c, 0] * sb[0] + PT[c, 1] * sb[1] + PT[c, 2] * sb[2]
+                    pa2 = PT[c, 0] * sc[0] + PT[c, 1] * sc[1] + PT[c, 2] * sc[2]
+                    if min(pa0, pa1, pa2) > PT[c, 4] or max(pa0, pa1, pa2) < PT[c, 3]:
+                        continue
+                    if (
+                        PT[c, 5] > smax0
+                        or PT[c, 8] < smin0
+                        or PT[c, 6] > smax1
+                        or PT[c, 9] < smin1
+                        or PT[c, 7] > smax2
+                        or PT[c, 10] < smin2
+                    ):
+                        continue
+                    reach = 0.5 * (
+                        abs(nx) * (PT[c, 8] - PT[c, 5])
+                        + abs(ny) * (PT[c, 9] - PT[c, 6])
+                        + abs(nz) * (PT[c, 10] - PT[c, 7])
+                    )
+                    mid = 0.5 * (
+                        nx * (PT[c, 5] + PT[c, 8])
+                        + ny * (PT[c, 6] + PT[c, 9])
+                        + nz * (PT[c, 7] + PT[c, 10])
+                    )
+                    if abs(mid - sd) > reach + margin:
+                        continue
                     for q in range(acs[c], acs[c + 1]):
                         if (
                             CBB[q, 0] > smax0
@@ -298,7 +347,28 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0):
     return seg, ncross, npairs, OK
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
+def _near_chunks(chunks, R, t, agrid, margin, rng, near):
+    """Which runs of `CHUNK` object faces may come near the hand's surface: the bounding
+    sphere of each run (``chunks`` (k, 4): centre in the object's frame, radius), moved by
+    ``x -> R x + t``, must hold a surface cell of the hand grid in its bounding box."""
+    alo, ah, an, atable = agrid[0], agrid[1], agrid[2], agrid[6]
+    for k in range(chunks.shape[0]):
+        r = chunks[k, 3] + margin
+        ok = True
+        for d in range(3):
+            m = R[d, 0] * chunks[k, 0] + R[d, 1] * chunks[k, 1] + R[d, 2] * chunks[k, 2] + t[d]
+            i0 = int(np.floor((m - r - alo[d]) / ah))
+            i1 = int(np.floor((m + r - alo[d]) / ah))
+            if i1 < 0 or i0 >= an[d]:
+                ok = False
+                break
+            rng[d, 0] = max(i0, 0)
+            rng[d, 1] = min(i1, an[d] - 1)
+        near[k] = ok and surface_cells_in(atable, an, rng) > 0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def _hand_status(AS, AV, R, t, bgrid):
     """Status of every hand vertex from the object's grid cells (moved into the object's own
     frame): 1 inside, 0 outside, -1 in a cell the object's surface touches."""
@@ -314,8 +384,8 @@ def _hand_status(AS, AV, R, t, bgrid):
         AS[i] = point_status(xb, blo, bh, bn, bstat)
 
 
-@njit(cache=True, nogil=True)
-def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
+@njit(cache=True, nogil=True, error_model="numpy")
+def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, stats):
     """Volume of A ∩ (pose · B) for each pose; A (the hand) is fixed, B is in its own frame.
 
     ``X = (AD, AN, ABB, AP, cell_rep, AW)`` holds per-face data of A (`face_terms`, bounding
@@ -348,6 +418,7 @@ def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
     astamp = np.full(AF.shape[0], -1, np.int64)
     bstamp = np.full(mb, -1, np.int64)
     token = -1
+    near = np.zeros(bchunks.shape[0], np.bool_)
     W = (
         acnt,
         bcnt,
@@ -367,7 +438,7 @@ def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
     ptol = 1e-9 * ah
     # A bound on every coordinate (at least 1), for the pre-test's error bound.
     amax = max(1.0, np.abs(AV).max())
-    nparts = (cell_rep >= 0).sum()
+    nparts = cell_rep.shape[0]
     for ip in range(poses.shape[0]):
         R = poses[ip, :3, :3]
         t = poses[ip, :3, 3]
@@ -387,8 +458,9 @@ def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
             bcnt[brec[0][k]] = 0
         nrec[:] = 0
         cellmark[:] = False
+        _near_chunks(bchunks, R, t, agrid, margin, W[9], near)
         seg, ncross, npairs, code = _object_faces(
-            A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, ip * mb
+            A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, ip * mb, near
         )
         if code == OK:
             u = _resolve(AS, A[6], A[7], A[8], acnt, queue)
@@ -405,7 +477,10 @@ def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
                 AS[u] = ray_status(xq, BV0, BF, bgrid, bstamp, token)
                 if AS[u] < 0:
                     code = DEGENERATE
-                u = _resolve(AS, A[6], A[7], A[8], acnt, queue)
+                else:
+                    queue[0] = u
+                    _spread(AS, A[6], A[7], A[8], acnt, queue, 1)
+                    u = _next_unknown(AS, u + 1)
         if code == OK:
             u = _resolve(BS, B[6], B[7], B[8], bcnt, queue)
             while u >= 0 and code == OK:
@@ -413,7 +488,10 @@ def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
                 BS[u] = ray_status(BV[u], AV, AF, agrid, astamp, token)
                 if BS[u] < 0:
                     code = DEGENERATE
-                u = _resolve(BS, B[6], B[7], B[8], bcnt, queue)
+                else:
+                    queue[0] = u
+                    _spread(BS, B[6], B[7], B[8], bcnt, queue, 1)
+                    u = _next_unknown(BS, u + 1)
         if code == OK:
             sa_, oka = _edge_sum(
                 AV, AD, AE, AET, AS, acnt, arec[0], arec[1], nrec[0], X[5], A[6], A[7], A[8]
@@ -429,19 +507,17 @@ def pose_volumes(poses, A, X, agrid, B, bgrid, tiny, cap, out, codes, stats):
         stats[ip, STAT_CROSSING] = ncross
         touched = 0
         inside = 0
-        for c in range(cell_rep.shape[0]):
-            if cell_rep[c] < 0:
-                continue
-            if cellmark[c]:
+        for k in range(cell_rep.shape[0]):
+            if cellmark[cell_rep[k, 0]]:
                 touched += 1
-            elif AS[cell_rep[c]] == 1:
+            elif AS[cell_rep[k, 1]] == 1:
                 inside += 1
         stats[ip, STAT_CELLS_TOUCHED] = touched
         stats[ip, STAT_CELLS_INSIDE] = inside
         stats[ip, STAT_CELLS_OUTSIDE] = nparts - touched - inside
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _shell_straddles(V, comp, seen, R, t, inverse, grid):
     """Whether some shell of mesh V (vertex -> shell `comp`) has a vertex in a cell wholly
     inside the other mesh and one in a cell wholly outside it; the vertices move by x -> R x + t
@@ -468,7 +544,7 @@ def _shell_straddles(V, comp, seen, R, t, inverse, grid):
     return False
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def surfaces_cross(poses, AV, acomp, ancomp, agrid, BV0, bcomp, bncomp, bgrid):
     """Per pose, whether the moved object's surface certainly crosses the hand's: a connected
     shell of either mesh has one vertex in a cell wholly inside the other mesh and another in
