@@ -1,6 +1,7 @@
 """Benchmark of the exact backend on the real Barrett-hand grasps.
 
-For each grasp: seconds per descriptor (all poses), share of poses and hand parts culled, and
+For each grasp: seconds per descriptor (all poses; those equal to another to rounding, the
+"repeats", are computed once), share of poses and hand parts culled, and
 the plain loop (one manifold3d boolean of the whole hand and the whole object per pose) timed
 in the same run on a subsample of poses, with the largest relative difference between the two.
 
@@ -78,6 +79,7 @@ def main(argv: list[str] | None = None) -> int:
         "obj tri",
         "build s",
         "s/descr",
+        "repeats",
         "poses culled",
         "parts culled",
         "parts inside",
@@ -134,6 +136,7 @@ def main(argv: list[str] | None = None) -> int:
                 str(sum(len(F) for _, F in bodies)),
                 f"{build:.1f}",
                 f"{per_descr:.2f}",
+                str(st["poses_repeated"]),
                 f"{st['poses_culled'] / st['poses']:.1%}",
                 f"{st['parts_culled'] / parts:.1%}",
                 f"{st['parts_inside'] / parts:.1%}",
