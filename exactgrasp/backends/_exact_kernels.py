@@ -91,21 +91,24 @@ def face_terms(V, F, tiny, D, N):
     ``D`` is set to zero where ``|N|² <= tiny``: such a face adds at most ``|a| sqrt(tiny) / 2``
     to the volume, and skipping it avoids dividing by zero.
     """
+    # Scalar loads only: an array view per vertex costs two atomic reference-count updates,
+    # which two threads sharing the mesh turn into cache-line contention.
     m = F.shape[0]
     for f in range(m):
-        a = V[F[f, 0]]
-        b = V[F[f, 1]]
-        c = V[F[f, 2]]
-        n0 = (b[1] - a[1]) * (c[2] - a[2]) - (b[2] - a[2]) * (c[1] - a[1])
-        n1 = (b[2] - a[2]) * (c[0] - a[0]) - (b[0] - a[0]) * (c[2] - a[2])
-        n2 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        i, j, k = F[f, 0], F[f, 1], F[f, 2]
+        a0, a1, a2 = V[i, 0], V[i, 1], V[i, 2]
+        b0, b1, b2 = V[j, 0] - a0, V[j, 1] - a1, V[j, 2] - a2
+        c0, c1, c2 = V[k, 0] - a0, V[k, 1] - a1, V[k, 2] - a2
+        n0 = b1 * c2 - b2 * c1
+        n1 = b2 * c0 - b0 * c2
+        n2 = b0 * c1 - b1 * c0
         N[f, 0] = n0
         N[f, 1] = n1
         N[f, 2] = n2
         nn = n0 * n0 + n1 * n1 + n2 * n2
         D[f, 0] = D[f, 1] = D[f, 2] = 0.0
         if nn > tiny:
-            s = (n0 * a[0] + n1 * a[1] + n2 * a[2]) / nn
+            s = (n0 * a0 + n1 * a1 + n2 * a2) / nn
             D[f, 0] = s * n0
             D[f, 1] = s * n1
             D[f, 2] = s * n2
@@ -114,13 +117,12 @@ def face_terms(V, F, tiny, D, N):
 @njit(cache=True, nogil=True, error_model="numpy")
 def edge_weight(V, D, E, ET, e):
     """``W_e = (D_t1 − D_t2) · (u × v) / 6`` for edge e."""
-    u = V[E[e, 0]]
-    v = V[E[e, 1]]
+    i, j = E[e, 0], E[e, 1]
     t1 = ET[e, 0]
     t2 = ET[e, 1]
-    cx = u[1] * v[2] - u[2] * v[1]
-    cy = u[2] * v[0] - u[0] * v[2]
-    cz = u[0] * v[1] - u[1] * v[0]
+    cx = V[i, 1] * V[j, 2] - V[i, 2] * V[j, 1]
+    cy = V[i, 2] * V[j, 0] - V[i, 0] * V[j, 2]
+    cz = V[i, 0] * V[j, 1] - V[i, 1] * V[j, 0]
     return (
         (D[t1, 0] - D[t2, 0]) * cx + (D[t1, 1] - D[t2, 1]) * cy + (D[t1, 2] - D[t2, 2]) * cz
     ) / 6.0
@@ -158,9 +160,15 @@ def _sep(ax, ay, az, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh):
 @njit(cache=True, nogil=True, error_model="numpy")
 def tri_box(cx, cy, cz, hh, a, b, c):
     """Separating-axis test: does triangle abc touch the cube of half-size hh at (cx, cy, cz)?"""
-    x0, y0, z0 = a[0] - cx, a[1] - cy, a[2] - cz
-    x1, y1, z1 = b[0] - cx, b[1] - cy, b[2] - cz
-    x2, y2, z2 = c[0] - cx, c[1] - cy, c[2] - cz
+    return tri_box_xyz(cx, cy, cz, hh, a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def tri_box_xyz(cx, cy, cz, hh, ax, ay, az, bx, by, bz, qx, qy, qz):
+    """`tri_box` with the triangle's corners as scalars (no array views in hot loops)."""
+    x0, y0, z0 = ax - cx, ay - cy, az - cz
+    x1, y1, z1 = bx - cx, by - cy, bz - cz
+    x2, y2, z2 = qx - cx, qy - cy, qz - cz
     if min(x0, x1, x2) > hh or max(x0, x1, x2) < -hh:
         return False
     if min(y0, y1, y2) > hh or max(y0, y1, y2) < -hh:
@@ -255,9 +263,15 @@ def surface_cells_in(table, n, rng):
 @njit(cache=True, nogil=True, error_model="numpy")
 def point_status(x, lo, h, n, status):
     """Inside (1) / outside (0) from the grid's cell statuses; -1 when x is in a surface cell."""
-    i = int(np.floor((x[0] - lo[0]) / h))
-    j = int(np.floor((x[1] - lo[1]) / h))
-    k = int(np.floor((x[2] - lo[2]) / h))
+    return point_status_xyz(x[0], x[1], x[2], lo, h, n, status)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def point_status_xyz(x, y, z, lo, h, n, status):
+    """`point_status` of the point (x, y, z)."""
+    i = int(np.floor((x - lo[0]) / h))
+    j = int(np.floor((y - lo[1]) / h))
+    k = int(np.floor((z - lo[2]) / h))
     if i < 0 or j < 0 or k < 0 or i >= n[0] or j >= n[1] or k >= n[2]:
         return 0
     return status[(i * n[1] + j) * n[2] + k]

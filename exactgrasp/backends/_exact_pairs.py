@@ -13,7 +13,7 @@ def _side(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
     return (0 if not ok else (1 if d > 0 else -1)), d
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@njit(cache=True, nogil=True, error_model="numpy")
 def _edges_through(
     f, F, TE, TO, V, row, ax, ay, az, bx, by, bz, cx, cy, cz,
     cnt, rec_e, rec_l, nrec, P, npt, sg, dt, bound,
@@ -57,13 +57,18 @@ def _edges_through(
     return npt, 0
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@njit(cache=True, nogil=True, error_model="numpy")
 def pair(
     t, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, AN, BD, BN, acnt, bcnt,
-    arec_e, arec_l, brec_e, brec_l, nrec, P, sg, dt,
+    arec_e, arec_l, brec_e, brec_l, nrec, P, sg, dt, sided,
 ):  # fmt: skip
     """Contribution of face pair (t of A, s of B); records edge crossings. Returns
     (segment term, code) with code 0 no crossing, 1 crossing, 2 degenerate, 3 overflow.
+
+    With ``sided`` the caller has filled ``sg`` / ``dt`` (row 0: t's vertices against s's
+    plane, row 1: s's against t's; certain signs and values proportional to the distances,
+    one scale per row) and both faces straddle the other's plane; otherwise they are computed
+    here with `orient`.
 
     Arrays come one by one, not in the mesh tuples: unpacking a tuple of arrays on every call
     costs more than the pair test."""
@@ -80,14 +85,14 @@ def pair(
     ext = max(ext, max(taz, tbz, tcz, saz, sbz, scz) - min(taz, tbz, tcz, saz, sbz, scz))
     bound = orient_bound(ext * (1.0 + 1e-12))
     # Vertices of each face against the other's plane: a face wholly on one side is done.
-    for k in range(3):
+    for k in range(0 if sided else 3):
         v = AF[t, k]
         sg[0, k], dt[0, k] = _side(
             sax, say, saz, sbx, sby, sbz, scx, scy, scz, AV[v, 0], AV[v, 1], AV[v, 2], bound
         )
     if sg[0, 0] != 0 and sg[0, 0] == sg[0, 1] and sg[0, 1] == sg[0, 2]:
         return 0.0, 0
-    for k in range(3):
+    for k in range(0 if sided else 3):
         v = BF[s, k]
         sg[1, k], dt[1, k] = _side(
             tax, tay, taz, tbx, tby, tbz, tcx, tcy, tcz, BV[v, 0], BV[v, 1], BV[v, 2], bound
@@ -114,12 +119,12 @@ def pair(
     cx = AN[t, 1] * BN[s, 2] - AN[t, 2] * BN[s, 1]
     cy = AN[t, 2] * BN[s, 0] - AN[t, 0] * BN[s, 2]
     cz = AN[t, 0] * BN[s, 1] - AN[t, 1] * BN[s, 0]
-    p = P[0]
-    q = P[1]
-    if (q[0] - p[0]) * cx + (q[1] - p[1]) * cy + (q[2] - p[2]) * cz < 0:
-        p, q = q, p
-    px = p[1] * q[2] - p[2] * q[1]
-    py = p[2] * q[0] - p[0] * q[2]
-    pz = p[0] * q[1] - p[1] * q[0]
+    p0, p1, p2 = P[0, 0], P[0, 1], P[0, 2]
+    q0, q1, q2 = P[1, 0], P[1, 1], P[1, 2]
+    if (q0 - p0) * cx + (q1 - p1) * cy + (q2 - p2) * cz < 0:
+        p0, p1, p2, q0, q1, q2 = q0, q1, q2, p0, p1, p2
+    px = p1 * q2 - p2 * q1
+    py = p2 * q0 - p0 * q2
+    pz = p0 * q1 - p1 * q0
     dd = (AD[t, 0] - BD[s, 0]) * px + (AD[t, 1] - BD[s, 1]) * py + (AD[t, 2] - BD[s, 2]) * pz
     return dd / 6.0, 1

@@ -21,9 +21,10 @@ from exactgrasp.backends._exact_kernels import (
     edge_weight,
     face_terms,
     point_status,
+    point_status_xyz,
     ray_status,
     surface_cells_in,
-    tri_box,
+    tri_box_xyz,
     tri_cell_range,
 )
 from exactgrasp.backends._exact_pairs import pair
@@ -141,20 +142,23 @@ def _edge_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, adj_start, adj_vert
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _crossings_on_line(p, q, r, dp, dq, dr, Dx, Dy, Dz, ext):
-    """Where triangle pqr meets a plane, projected on the direction (Dx, Dy, Dz) of that
-    plane's line with another plane: (lo, hi, error bound). dp, dq, dr are the vertices'
-    signed distances to the plane, all farther than the tolerance, not all of one sign."""
+def _sgn(x):
+    return 1 if x > 0 else -1
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _crossings_on_line(xp, xq, xr, dp, dq, dr, ext):
+    """Where a triangle meets a plane, projected on the direction of that plane's line with
+    another plane: (lo, hi, error bound). xp, xq, xr are the vertices' projections on that
+    direction, dp, dq, dr their signed distances to the plane, all farther than the tolerance,
+    not all of one sign."""
     # The lone vertex (the one on its own side) and the two edges from it that cross.
     if (dp > 0) == (dq > 0):
-        k, i, j, dk, di, dj = r, p, q, dr, dp, dq
+        xk, xi, xj, dk, di, dj = xr, xp, xq, dr, dp, dq
     elif (dp > 0) == (dr > 0):
-        k, i, j, dk, di, dj = q, p, r, dq, dp, dr
+        xk, xi, xj, dk, di, dj = xq, xp, xr, dq, dp, dr
     else:
-        k, i, j, dk, di, dj = p, q, r, dp, dq, dr
-    xk = Dx * k[0] + Dy * k[1] + Dz * k[2]
-    xi = Dx * i[0] + Dy * i[1] + Dz * i[2]
-    xj = Dx * j[0] + Dy * j[1] + Dz * j[2]
+        xk, xi, xj, dk, di, dj = xp, xq, xr, dp, dq, dr
     ai = abs(dk) + abs(di)
     aj = abs(dk) + abs(dj)
     a = xk + (xi - xk) * (abs(dk) / ai)
@@ -166,15 +170,15 @@ def _crossings_on_line(p, q, r, dp, dq, dr, Dx, Dy, Dz, ext):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _apart_on_line(t0, t1, t2, e0, e1, e2, s0, s1, s2, f0, f1, f2, ax, ay, az, bx, by, bz,
-                   ptol, gscale):  # fmt: skip
+def _apart_on_line(T, e0, e1, e2, S, f0, f1, f2, ax, ay, az, bx, by, bz, ptol, gscale):
     """Floating-point pre-test of a face pair whose planes both straddle: True only when the
     two faces certainly do not meet, their crossing segments on the planes' common line being
     apart by far more than rounding. Anything close, or a vertex near the other plane, is left
     to the exact test (`pair`), so the pre-test never changes a result.
 
-    ``e*`` are the distances of t's vertices to s's plane and ``f*`` of s's to t's; (ax, ay,
-    az) and (bx, by, bz) the unit normals of t and s; ``gscale`` bounds every coordinate."""
+    ``T`` and ``S`` are the two faces' corners as 9-tuples of scalars (x0, y0, z0, x1, ...);
+    ``e*`` are the distances of T's vertices to S's plane and ``f*`` of S's to T's; (ax, ay,
+    az) and (bx, by, bz) the unit normals of T and S; ``gscale`` bounds every coordinate."""
     if min(abs(e0), abs(e1), abs(e2), abs(f0), abs(f1), abs(f2)) <= ptol:
         return False
     Dx = ay * bz - az * by
@@ -182,11 +186,21 @@ def _apart_on_line(t0, t1, t2, e0, e1, e2, s0, s1, s2, f0, f1, f2, ax, ay, az, b
     Dz = ax * by - ay * bx
     ext = 0.0
     for k in range(3):
-        hi = max(t0[k], t1[k], t2[k], s0[k], s1[k], s2[k])
-        lo = min(t0[k], t1[k], t2[k], s0[k], s1[k], s2[k])
+        hi = max(T[k], T[3 + k], T[6 + k], S[k], S[3 + k], S[6 + k])
+        lo = min(T[k], T[3 + k], T[6 + k], S[k], S[3 + k], S[6 + k])
         ext = max(ext, hi - lo)
-    lo_t, hi_t, err_t = _crossings_on_line(t0, t1, t2, e0, e1, e2, Dx, Dy, Dz, ext)
-    lo_s, hi_s, err_s = _crossings_on_line(s0, s1, s2, f0, f1, f2, Dx, Dy, Dz, ext)
+    lo_t, hi_t, err_t = _crossings_on_line(
+        Dx * T[0] + Dy * T[1] + Dz * T[2],
+        Dx * T[3] + Dy * T[4] + Dz * T[5],
+        Dx * T[6] + Dy * T[7] + Dz * T[8],
+        e0, e1, e2, ext,
+    )  # fmt: skip
+    lo_s, hi_s, err_s = _crossings_on_line(
+        Dx * S[0] + Dy * S[1] + Dz * S[2],
+        Dx * S[3] + Dy * S[4] + Dz * S[5],
+        Dx * S[6] + Dy * S[7] + Dz * S[8],
+        f0, f1, f2, ext,
+    )  # fmt: skip
     gap = max(lo_s - hi_t, lo_t - hi_s)
     return gap > (err_t + err_s) * gscale
 
@@ -217,17 +231,22 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
             continue
         if surface_cells_in(atable, an, rng) == 0:
             continue
-        sa, sb, sc = BV[BF[s, 0]], BV[BF[s, 1]], BV[BF[s, 2]]
-        smax0 = max(sa[0], sb[0], sc[0]) + margin
-        smax1 = max(sa[1], sb[1], sc[1]) + margin
-        smax2 = max(sa[2], sb[2], sc[2]) + margin
-        smin0 = min(sa[0], sb[0], sc[0]) - margin
-        smin1 = min(sa[1], sb[1], sc[1]) - margin
-        smin2 = min(sa[2], sb[2], sc[2]) - margin
+        # Corners as scalars: array views in these loops would cost atomic reference counts.
+        i0, i1, i2 = BF[s, 0], BF[s, 1], BF[s, 2]
+        sa0, sa1, sa2 = BV[i0, 0], BV[i0, 1], BV[i0, 2]
+        sb0, sb1, sb2 = BV[i1, 0], BV[i1, 1], BV[i1, 2]
+        sc0, sc1, sc2 = BV[i2, 0], BV[i2, 1], BV[i2, 2]
+        S9 = (sa0, sa1, sa2, sb0, sb1, sb2, sc0, sc1, sc2)
+        smax0 = max(sa0, sb0, sc0) + margin
+        smax1 = max(sa1, sb1, sc1) + margin
+        smax2 = max(sa2, sb2, sc2) + margin
+        smin0 = min(sa0, sb0, sc0) - margin
+        smin1 = min(sa1, sb1, sc1) - margin
+        smin2 = min(sa2, sb2, sc2) - margin
         nrm = np.sqrt(BN[s, 0] ** 2 + BN[s, 1] ** 2 + BN[s, 2] ** 2)
         inv = 1.0 / nrm if nrm > 0 else 0.0
         nx, ny, nz = BN[s, 0] * inv, BN[s, 1] * inv, BN[s, 2] * inv
-        sd = nx * sa[0] + ny * sa[1] + nz * sa[2]
+        sd = nx * sa0 + ny * sa1 + nz * sa2
         # Walk the columns along the normal's dominant axis d and visit only the cells the face's
         # plane passes through (with a margin); the separating-axis test then decides.
         d = 0
@@ -266,18 +285,12 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                     c = base + cur * stride_d
                     cen[d] = alo[d] + (cur + 0.5) * ah
                     cur = nxt[d, c + stride_d] if cur + 1 < an[d] else an[d]
-                    if not tri_box(cen[0], cen[1], cen[2], hh, sa, sb, sc):
-                        continue
-                    cellmark[c] = True
-                    # Separating axes between the face and everything listed in the cell: the
-                    # listed faces' mean normal (a thin slab where the hand's surface is nearly
-                    # flat), then the face's own normal and the coordinate axes against the
-                    # listed faces' common bounding box.
-                    pa0 = PT[c, 0] * sa[0] + PT[c, 1] * sa[1] + PT[c, 2] * sa[2]
-                    pa1 = PT[c, 0] * sb[0] + PT[c, 1] * sb[1] + PT[c, 2] * sb[2]
-                    pa2 = PT[c, 0] * sc[0] + PT[c, 1] * sc[1] + PT[c, 2] * sc[2]
-                    if min(pa0, pa1, pa2) > PT[c, 4] or max(pa0, pa1, pa2) < PT[c, 3]:
-                        continue
+                    # Separating axes between the face and everything listed in the cell
+                    # (cheapest first): the coordinate axes against the listed faces' common
+                    # bounding box, the listed faces' mean normal (a thin slab where the hand's
+                    # surface is nearly flat), the face's own normal against that box, and last
+                    # the cell itself (`tri_box`): a crossing outside this cell is found in
+                    # another cell that both faces touch.
                     if (
                         PT[c, 5] > smax0
                         or PT[c, 8] < smin0
@@ -286,6 +299,11 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                         or PT[c, 7] > smax2
                         or PT[c, 10] < smin2
                     ):
+                        continue
+                    pa0 = PT[c, 0] * sa0 + PT[c, 1] * sa1 + PT[c, 2] * sa2
+                    pa1 = PT[c, 0] * sb0 + PT[c, 1] * sb1 + PT[c, 2] * sb2
+                    pa2 = PT[c, 0] * sc0 + PT[c, 1] * sc1 + PT[c, 2] * sc2
+                    if min(pa0, pa1, pa2) > PT[c, 4] or max(pa0, pa1, pa2) < PT[c, 3]:
                         continue
                     reach = 0.5 * (
                         abs(nx) * (PT[c, 8] - PT[c, 5])
@@ -299,6 +317,11 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                     )
                     if abs(mid - sd) > reach + margin:
                         continue
+                    if not tri_box_xyz(
+                        cen[0], cen[1], cen[2], hh, sa0, sa1, sa2, sb0, sb1, sb2, sc0, sc1, sc2
+                    ):
+                        continue
+                    cellmark[c] = True
                     for q in range(acs[c], acs[c + 1]):
                         if (
                             CBB[q, 0] > smax0
@@ -323,22 +346,34 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                             e0 < -ptol and e1 < -ptol and e2 < -ptol
                         ):
                             continue
-                        f0 = sa[0] * AP[ft, 0] + sa[1] * AP[ft, 1] + sa[2] * AP[ft, 2] - AP[ft, 3]
-                        f1 = sb[0] * AP[ft, 0] + sb[1] * AP[ft, 1] + sb[2] * AP[ft, 2] - AP[ft, 3]
-                        f2 = sc[0] * AP[ft, 0] + sc[1] * AP[ft, 1] + sc[2] * AP[ft, 2] - AP[ft, 3]
+                        f0 = sa0 * AP[ft, 0] + sa1 * AP[ft, 1] + sa2 * AP[ft, 2] - AP[ft, 3]
+                        f1 = sb0 * AP[ft, 0] + sb1 * AP[ft, 1] + sb2 * AP[ft, 2] - AP[ft, 3]
+                        f2 = sc0 * AP[ft, 0] + sc1 * AP[ft, 1] + sc2 * AP[ft, 2] - AP[ft, 3]
                         if (f0 > ptol and f1 > ptol and f2 > ptol) or (
                             f0 < -ptol and f1 < -ptol and f2 < -ptol
                         ):
                             continue
+                        T9 = (
+                            AV[v0, 0], AV[v0, 1], AV[v0, 2], AV[v1, 0], AV[v1, 1], AV[v1, 2],
+                            AV[v2, 0], AV[v2, 1], AV[v2, 2],
+                        )  # fmt: skip
                         if _apart_on_line(
-                            AV[v0], AV[v1], AV[v2], e0, e1, e2, sa, sb, sc, f0, f1, f2,
+                            T9, e0, e1, e2, S9, f0, f1, f2,
                             AP[ft, 0], AP[ft, 1], AP[ft, 2], nx, ny, nz, ptol, gscale,
                         ):  # fmt: skip
                             continue
                         npairs += 1
+                        # A vertex farther than ptol from the other plane has a certain side:
+                        # where all six are, the pair reuses these distances instead of `orient`.
+                        sided = min(abs(e0), abs(e1), abs(e2), abs(f0), abs(f1), abs(f2)) > ptol
+                        if sided:
+                            sg[0, 0], sg[0, 1], sg[0, 2] = _sgn(e0), _sgn(e1), _sgn(e2)
+                            sg[1, 0], sg[1, 1], sg[1, 2] = _sgn(f0), _sgn(f1), _sgn(f2)
+                            dt[0, 0], dt[0, 1], dt[0, 2] = e0, e1, e2
+                            dt[1, 0], dt[1, 1], dt[1, 2] = f0, f1, f2
                         term, pc = pair(
                             ft, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, AN, BD, BN,
-                            acnt, bcnt, arec_e, arec_l, brec_e, brec_l, nrec, P, sg, dt,
+                            acnt, bcnt, arec_e, arec_l, brec_e, brec_l, nrec, P, sg, dt, sided,
                         )  # fmt: skip
                         if pc >= 2:
                             return seg, ncross, npairs, (DEGENERATE if pc == 2 else OVERFLOW)
@@ -373,15 +408,18 @@ def _hand_status(AS, AV, R, t, bgrid):
     """Status of every hand vertex from the object's grid cells (moved into the object's own
     frame): 1 inside, 0 outside, -1 in a cell the object's surface touches."""
     blo, bh, bn, bstat = bgrid[0], bgrid[1], bgrid[2], bgrid[3]
-    xb = np.empty(3)
+    r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
+    r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
+    r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
+    t0, t1, t2 = t[0], t[1], t[2]
     for i in range(AV.shape[0]):
-        for k in range(3):
-            xb[k] = (
-                R[0, k] * (AV[i, 0] - t[0])
-                + R[1, k] * (AV[i, 1] - t[1])
-                + R[2, k] * (AV[i, 2] - t[2])
-            )
-        AS[i] = point_status(xb, blo, bh, bn, bstat)
+        d0, d1, d2 = AV[i, 0] - t0, AV[i, 1] - t1, AV[i, 2] - t2
+        AS[i] = point_status_xyz(
+            r00 * d0 + r10 * d1 + r20 * d2,
+            r01 * d0 + r11 * d1 + r21 * d2,
+            r02 * d0 + r12 * d1 + r22 * d2,
+            blo, bh, bn, bstat,
+        )  # fmt: skip
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -449,7 +487,7 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
         gscale = max(amax, np.abs(BV).max())
         _hand_status(AS, AV, R, t, bgrid)
         for i in range(nb):
-            BS[i] = point_status(BV[i], alo, ah, an, astat)
+            BS[i] = point_status_xyz(BV[i, 0], BV[i, 1], BV[i, 2], alo, ah, an, astat)
         # Counters are cleared where the last pose set them; face stamps are unique per pose
         # (ip * mb + s), so neither needs a pass over a whole mesh.
         for k in range(nrec[0]):
