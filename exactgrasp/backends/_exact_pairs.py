@@ -115,16 +115,24 @@ def pair(
         return 0.0, 0
     if npt != 2:
         return 0.0, 2
-    # Direct p -> q along n_t x n_s: A ∩ B then lies to the left of the segment on face t.
-    cx = AN[t, 1] * BN[s, 2] - AN[t, 2] * BN[s, 1]
-    cy = AN[t, 2] * BN[s, 0] - AN[t, 0] * BN[s, 2]
-    cz = AN[t, 0] * BN[s, 1] - AN[t, 1] * BN[s, 0]
-    p0, p1, p2 = P[0, 0], P[0, 1], P[0, 2]
-    q0, q1, q2 = P[1, 0], P[1, 1], P[1, 2]
+    return (
+        segment_term(
+            P[0, 0], P[0, 1], P[0, 2], P[1, 0], P[1, 1], P[1, 2], AN[t, 0], AN[t, 1], AN[t, 2],
+            BN[s, 0], BN[s, 1], BN[s, 2], AD[t, 0] - BD[s, 0], AD[t, 1] - BD[s, 1],
+            AD[t, 2] - BD[s, 2],
+        ),
+        1,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def segment_term(p0, p1, p2, q0, q1, q2, a0, a1, a2, b0, b1, b2, g0, g1, g2):
+    """Term of the segment pq where face t (normal a) meets face s (normal b): the segment is
+    directed along a x b (A ∩ B then lies to its left on face t) and weighted by
+    g = D_t - D_s: ``g · (p x q) / 6``."""
+    cx = a1 * b2 - a2 * b1
+    cy = a2 * b0 - a0 * b2
+    cz = a0 * b1 - a1 * b0
     if (q0 - p0) * cx + (q1 - p1) * cy + (q2 - p2) * cz < 0:
         p0, p1, p2, q0, q1, q2 = q0, q1, q2, p0, p1, p2
-    px = p1 * q2 - p2 * q1
-    py = p2 * q0 - p0 * q2
-    pz = p0 * q1 - p1 * q0
-    dd = (AD[t, 0] - BD[s, 0]) * px + (AD[t, 1] - BD[s, 1]) * py + (AD[t, 2] - BD[s, 2]) * pz
-    return dd / 6.0, 1
+    return (g0 * (p1 * q2 - p2 * q1) + g1 * (p2 * q0 - p0 * q2) + g2 * (p0 * q1 - p1 * q0)) / 6.0

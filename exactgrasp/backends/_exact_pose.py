@@ -21,13 +21,12 @@ from exactgrasp.backends._exact_kernels import (
     edge_weight,
     face_terms,
     point_status,
-    point_status_xyz,
     ray_status,
     surface_cells_in,
     tri_box_xyz,
     tri_cell_range,
 )
-from exactgrasp.backends._exact_pairs import pair
+from exactgrasp.backends._exact_pairs import pair, segment_term
 
 #: Object faces are first tested in runs of this many consecutive faces (see `_near_chunks`).
 CHUNK = 16
@@ -147,62 +146,56 @@ def _sgn(x):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _crossings_on_line(xp, xq, xr, dp, dq, dr, ext):
-    """Where a triangle meets a plane, projected on the direction of that plane's line with
-    another plane: (lo, hi, error bound). xp, xq, xr are the vertices' projections on that
-    direction, dp, dq, dr their signed distances to the plane, all farther than the tolerance,
-    not all of one sign."""
-    # The lone vertex (the one on its own side) and the two edges from it that cross.
-    if (dp > 0) == (dq > 0):
-        xk, xi, xj, dk, di, dj = xr, xp, xq, dr, dp, dq
-    elif (dp > 0) == (dr > 0):
-        xk, xi, xj, dk, di, dj = xq, xp, xr, dq, dp, dr
+def _span(a, b, c, d, e, f):
+    return max(a, b, c, d, e, f) - min(a, b, c, d, e, f)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _lone(d0, d1, d2):
+    """Index of the vertex alone on its side of a plane (signed distances d*, none zero,
+    not all of one sign): the two edges from it are the ones that cross the plane."""
+    if (d0 > 0) == (d1 > 0):
+        return 2
+    if (d0 > 0) == (d2 > 0):
+        return 1
+    return 0
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _on_line(x0, x1, x2, d0, d1, d2, k, ext):
+    """Where a triangle's two crossing edges meet a plane, projected on the direction of that
+    plane's line with another plane: (a, b, error bound), a on the edge from the lone vertex
+    k to corner k + 1 (face corner k's edge), b on the edge from k to corner k + 2 (corner
+    k + 2's edge). x* are the vertices' projections on that direction, d* their signed
+    distances to the plane, all farther than the tolerance."""
+    if k == 0:
+        xk, xi, xj, dk, di, dj = x0, x1, x2, d0, d1, d2
+    elif k == 1:
+        xk, xi, xj, dk, di, dj = x1, x2, x0, d1, d2, d0
     else:
-        xk, xi, xj, dk, di, dj = xp, xq, xr, dp, dq, dr
+        xk, xi, xj, dk, di, dj = x2, x0, x1, d2, d0, d1
     ai = abs(dk) + abs(di)
     aj = abs(dk) + abs(dj)
     a = xk + (xi - xk) * (abs(dk) / ai)
     b = xk + (xj - xk) * (abs(dk) / aj)
     # The crossing parameters err by about (error of the distances) / (ai or aj), which moves
     # the points by up to ext times that; 1e-11 is far above double rounding here.
-    err = 1e-11 * (1.0 + ext / min(ai, aj))
-    return min(a, b), max(a, b), err
+    return a, b, 1e-11 * (1.0 + ext / min(ai, aj))
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _apart_on_line(T, e0, e1, e2, S, f0, f1, f2, ax, ay, az, bx, by, bz, ptol, gscale):
-    """Floating-point pre-test of a face pair whose planes both straddle: True only when the
-    two faces certainly do not meet, their crossing segments on the planes' common line being
-    apart by far more than rounding. Anything close, or a vertex near the other plane, is left
-    to the exact test (`pair`), so the pre-test never changes a result.
+def _pick(d0, d1, d2, k):
+    return d0 if k == 0 else (d1 if k == 1 else d2)
 
-    ``T`` and ``S`` are the two faces' corners as 9-tuples of scalars (x0, y0, z0, x1, ...);
-    ``e*`` are the distances of T's vertices to S's plane and ``f*`` of S's to T's; (ax, ay,
-    az) and (bx, by, bz) the unit normals of T and S; ``gscale`` bounds every coordinate."""
-    if min(abs(e0), abs(e1), abs(e2), abs(f0), abs(f1), abs(f2)) <= ptol:
-        return False
-    Dx = ay * bz - az * by
-    Dy = az * bx - ax * bz
-    Dz = ax * by - ay * bx
-    ext = 0.0
-    for k in range(3):
-        hi = max(T[k], T[3 + k], T[6 + k], S[k], S[3 + k], S[6 + k])
-        lo = min(T[k], T[3 + k], T[6 + k], S[k], S[3 + k], S[6 + k])
-        ext = max(ext, hi - lo)
-    lo_t, hi_t, err_t = _crossings_on_line(
-        Dx * T[0] + Dy * T[1] + Dz * T[2],
-        Dx * T[3] + Dy * T[4] + Dz * T[5],
-        Dx * T[6] + Dy * T[7] + Dz * T[8],
-        e0, e1, e2, ext,
-    )  # fmt: skip
-    lo_s, hi_s, err_s = _crossings_on_line(
-        Dx * S[0] + Dy * S[1] + Dz * S[2],
-        Dx * S[3] + Dy * S[4] + Dz * S[5],
-        Dx * S[6] + Dy * S[7] + Dz * S[8],
-        f0, f1, f2, ext,
-    )  # fmt: skip
-    gap = max(lo_s - hi_t, lo_t - hi_s)
-    return gap > (err_t + err_s) * gscale
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _crossing(u, v, du, dv):
+    """Edge uv (signed distances du, dv to a plane, of opposite signs) meets the plane at
+    ``x_u + lam (x_v - x_u)``: (u, v, lam) with the lower vertex index first, as in `pair`,
+    so that both faces of an edge compute the same point."""
+    if u > v:
+        u, v, du, dv = v, u, dv, du
+    return u, v, du / (du - dv)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -219,6 +212,7 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
     alo, ah, an, acs, act, atable = agrid[0], agrid[1], agrid[2], agrid[4], agrid[5], agrid[6]
     acnt, bcnt, arec, brec, nrec, stamp, P, sg, dt, rng, cellmark = W
     arec_e, arec_l, brec_e, brec_l = arec[0], arec[1], brec[0], brec[1]
+    cap = arec_e.shape[0]
     BF = B[1]
     seg = 0.0
     ncross = 0
@@ -236,7 +230,6 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
         sa0, sa1, sa2 = BV[i0, 0], BV[i0, 1], BV[i0, 2]
         sb0, sb1, sb2 = BV[i1, 0], BV[i1, 1], BV[i1, 2]
         sc0, sc1, sc2 = BV[i2, 0], BV[i2, 1], BV[i2, 2]
-        S9 = (sa0, sa1, sa2, sb0, sb1, sb2, sc0, sc1, sc2)
         smax0 = max(sa0, sb0, sc0) + margin
         smax1 = max(sa1, sb1, sc1) + margin
         smax2 = max(sa2, sb2, sc2) + margin
@@ -332,6 +325,27 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                             or CBB[q, 5] < smin2
                         ):
                             continue
+                        # The face's box against the object face's plane (read in cell order,
+                        # before the face's own corners are fetched).
+                        if (
+                            abs(
+                                0.5
+                                * (
+                                    nx * (CBB[q, 0] + CBB[q, 3])
+                                    + ny * (CBB[q, 1] + CBB[q, 4])
+                                    + nz * (CBB[q, 2] + CBB[q, 5])
+                                )
+                                - sd
+                            )
+                            > 0.5
+                            * (
+                                abs(nx) * (CBB[q, 3] - CBB[q, 0])
+                                + abs(ny) * (CBB[q, 4] - CBB[q, 1])
+                                + abs(nz) * (CBB[q, 5] - CBB[q, 2])
+                            )
+                            + 2.0 * ptol
+                        ):
+                            continue
                         ft = act[q]
                         if stamp[ft] == stamp0 + s:
                             continue
@@ -353,24 +367,112 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                             f0 < -ptol and f1 < -ptol and f2 < -ptol
                         ):
                             continue
-                        T9 = (
-                            AV[v0, 0], AV[v0, 1], AV[v0, 2], AV[v1, 0], AV[v1, 1], AV[v1, 2],
-                            AV[v2, 0], AV[v2, 1], AV[v2, 2],
-                        )  # fmt: skip
-                        if _apart_on_line(
-                            T9, e0, e1, e2, S9, f0, f1, f2,
-                            AP[ft, 0], AP[ft, 1], AP[ft, 2], nx, ny, nz, ptol, gscale,
-                        ):  # fmt: skip
-                            continue
-                        npairs += 1
-                        # A vertex farther than ptol from the other plane has a certain side:
-                        # where all six are, the pair reuses these distances instead of `orient`.
+                        # Both planes straddled and every vertex clear of the other plane:
+                        # the faces' crossing segments on the planes' common line decide in
+                        # floating point where every end of one is far (beyond rounding) from
+                        # both ends of the other. Anything closer goes to the exact `pair`.
+                        # Scalars only in here: passing arrays to a function that is not
+                        # inlined costs atomic reference counts on every call.
                         sided = min(abs(e0), abs(e1), abs(e2), abs(f0), abs(f1), abs(f2)) > ptol
                         if sided:
+                            ux, uy, uz = AP[ft, 0], AP[ft, 1], AP[ft, 2]
+                            Dx = uy * nz - uz * ny
+                            Dy = uz * nx - ux * nz
+                            Dz = ux * ny - uy * nx
+                            t0x, t0y, t0z = AV[v0, 0], AV[v0, 1], AV[v0, 2]
+                            t1x, t1y, t1z = AV[v1, 0], AV[v1, 1], AV[v1, 2]
+                            t2x, t2y, t2z = AV[v2, 0], AV[v2, 1], AV[v2, 2]
+                            ext = max(
+                                _span(t0x, t1x, t2x, sa0, sb0, sc0),
+                                _span(t0y, t1y, t2y, sa1, sb1, sc1),
+                                _span(t0z, t1z, t2z, sa2, sb2, sc2),
+                            )
+                            kt = _lone(e0, e1, e2)
+                            at, bt, errt = _on_line(
+                                Dx * t0x + Dy * t0y + Dz * t0z,
+                                Dx * t1x + Dy * t1y + Dz * t1z,
+                                Dx * t2x + Dy * t2y + Dz * t2z,
+                                e0, e1, e2, kt, ext,
+                            )  # fmt: skip
+                            ks = _lone(f0, f1, f2)
+                            as_, bs, errs = _on_line(
+                                Dx * sa0 + Dy * sa1 + Dz * sa2,
+                                Dx * sb0 + Dy * sb1 + Dz * sb2,
+                                Dx * sc0 + Dy * sc1 + Dz * sc2,
+                                f0, f1, f2, ks, ext,
+                            )  # fmt: skip
+                            lot, hit = min(at, bt), max(at, bt)
+                            los, his = min(as_, bs), max(as_, bs)
+                            tol = (errt + errs) * gscale
+                            if max(los - hit, lot - his) > tol:
+                                continue
+                            npairs += 1
+                            if min(abs(at - as_), abs(at - bs), abs(bt - as_), abs(bt - bs)) > tol:
+                                # The overlap's two ends, each where an edge of one face crosses
+                                # the other face; the face owning that edge records it.
+                                npt = 0
+                                px = py = pz = qx = qy = qz = 0.0
+                                for w in range(4):
+                                    if w < 2:
+                                        if not (los < (at if w == 0 else bt) < his):
+                                            continue
+                                        k0 = kt if w == 0 else (kt + 2) % 3
+                                        k1 = (k0 + 1) % 3
+                                        u, v, lam = _crossing(
+                                            AF[ft, k0], AF[ft, k1], _pick(e0, e1, e2, k0),
+                                            _pick(e0, e1, e2, k1),
+                                        )  # fmt: skip
+                                        cx_ = AV[u, 0] + lam * (AV[v, 0] - AV[u, 0])
+                                        cy_ = AV[u, 1] + lam * (AV[v, 1] - AV[u, 1])
+                                        cz_ = AV[u, 2] + lam * (AV[v, 2] - AV[u, 2])
+                                        if ATO[ft, k0]:
+                                            if nrec[0] >= cap:
+                                                return seg, ncross, npairs, OVERFLOW
+                                            ed = ATE[ft, k0]
+                                            arec_e[nrec[0]] = ed
+                                            arec_l[nrec[0]] = lam
+                                            nrec[0] += 1
+                                            acnt[ed] += 1
+                                    else:
+                                        if not (lot < (as_ if w == 2 else bs) < hit):
+                                            continue
+                                        k0 = ks if w == 2 else (ks + 2) % 3
+                                        k1 = (k0 + 1) % 3
+                                        u, v, lam = _crossing(
+                                            BF[s, k0], BF[s, k1], _pick(f0, f1, f2, k0),
+                                            _pick(f0, f1, f2, k1),
+                                        )  # fmt: skip
+                                        cx_ = BV[u, 0] + lam * (BV[v, 0] - BV[u, 0])
+                                        cy_ = BV[u, 1] + lam * (BV[v, 1] - BV[u, 1])
+                                        cz_ = BV[u, 2] + lam * (BV[v, 2] - BV[u, 2])
+                                        if BTO[s, k0]:
+                                            if nrec[1] >= cap:
+                                                return seg, ncross, npairs, OVERFLOW
+                                            ed = BTE[s, k0]
+                                            brec_e[nrec[1]] = ed
+                                            brec_l[nrec[1]] = lam
+                                            nrec[1] += 1
+                                            bcnt[ed] += 1
+                                    if npt == 0:
+                                        px, py, pz = cx_, cy_, cz_
+                                    else:
+                                        qx, qy, qz = cx_, cy_, cz_
+                                    npt += 1
+                                if npt != 2:
+                                    return seg, ncross, npairs, DEGENERATE
+                                seg += segment_term(
+                                    px, py, pz, qx, qy, qz, AN[ft, 0], AN[ft, 1], AN[ft, 2],
+                                    BN[s, 0], BN[s, 1], BN[s, 2], AD[ft, 0] - BD[s, 0],
+                                    AD[ft, 1] - BD[s, 1], AD[ft, 2] - BD[s, 2],
+                                )  # fmt: skip
+                                ncross += 1
+                                continue
                             sg[0, 0], sg[0, 1], sg[0, 2] = _sgn(e0), _sgn(e1), _sgn(e2)
                             sg[1, 0], sg[1, 1], sg[1, 2] = _sgn(f0), _sgn(f1), _sgn(f2)
                             dt[0, 0], dt[0, 1], dt[0, 2] = e0, e1, e2
                             dt[1, 0], dt[1, 1], dt[1, 2] = f0, f1, f2
+                        else:
+                            npairs += 1
                         term, pc = pair(
                             ft, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, AN, BD, BN,
                             acnt, bcnt, arec_e, arec_l, brec_e, brec_l, nrec, P, sg, dt, sided,
@@ -404,22 +506,35 @@ def _near_chunks(chunks, R, t, agrid, margin, rng, near):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _hand_status(AS, AV, R, t, bgrid):
-    """Status of every hand vertex from the object's grid cells (moved into the object's own
-    frame): 1 inside, 0 outside, -1 in a cell the object's surface touches."""
-    blo, bh, bn, bstat = bgrid[0], bgrid[1], bgrid[2], bgrid[3]
+def _statuses(S, V, R, t, inverse, grid):
+    """Status of every vertex of V in the other mesh's grid (1 inside, 0 outside, -1 in a cell
+    the other surface touches), the vertices moved into that mesh's frame by ``x -> R x + t``
+    or, with ``inverse``, by ``x -> R^T (x - t)``. One loop with scalar loads: a call per
+    vertex with the grid's arrays would cost atomic reference counts."""
+    lo, h, n, status = grid[0], grid[1], grid[2], grid[3]
+    l0, l1, l2, n0, n1, n2 = lo[0], lo[1], lo[2], n[0], n[1], n[2]
     r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
     r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
     r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
     t0, t1, t2 = t[0], t[1], t[2]
-    for i in range(AV.shape[0]):
-        d0, d1, d2 = AV[i, 0] - t0, AV[i, 1] - t1, AV[i, 2] - t2
-        AS[i] = point_status_xyz(
-            r00 * d0 + r10 * d1 + r20 * d2,
-            r01 * d0 + r11 * d1 + r21 * d2,
-            r02 * d0 + r12 * d1 + r22 * d2,
-            blo, bh, bn, bstat,
-        )  # fmt: skip
+    for i in range(V.shape[0]):
+        if inverse:
+            d0, d1, d2 = V[i, 0] - t0, V[i, 1] - t1, V[i, 2] - t2
+            x = r00 * d0 + r10 * d1 + r20 * d2
+            y = r01 * d0 + r11 * d1 + r21 * d2
+            z = r02 * d0 + r12 * d1 + r22 * d2
+        else:
+            x = V[i, 0]
+            y = V[i, 1]
+            z = V[i, 2]
+        # Dividing by h (not multiplying by 1 / h) gives exactly `point_status`'s cells.
+        a = int(np.floor((x - l0) / h))
+        b = int(np.floor((y - l1) / h))
+        c = int(np.floor((z - l2) / h))
+        if a < 0 or b < 0 or c < 0 or a >= n0 or b >= n1 or c >= n2:
+            S[i] = 0
+        else:
+            S[i] = status[(a * n1 + b) * n2 + c]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -436,7 +551,7 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
     BV0, BF, BE, BET = B[0], B[1], B[2], B[3]
     AD = X[0]
     cell_rep = X[4]
-    alo, ah, an, astat, acs = agrid[0], agrid[1], agrid[2], agrid[3], agrid[4]
+    ah, acs = agrid[1], agrid[4]
     na, nb = AV.shape[0], BV0.shape[0]
     mb = BF.shape[0]
     BV = np.empty_like(BV0)
@@ -485,9 +600,8 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
                 BV[i, k] = R[k, 0] * BV0[i, 0] + R[k, 1] * BV0[i, 1] + R[k, 2] * BV0[i, 2] + t[k]
         face_terms(BV, BF, tiny, BD, BN)
         gscale = max(amax, np.abs(BV).max())
-        _hand_status(AS, AV, R, t, bgrid)
-        for i in range(nb):
-            BS[i] = point_status_xyz(BV[i, 0], BV[i, 1], BV[i, 2], alo, ah, an, astat)
+        _statuses(AS, AV, R, t, True, bgrid)
+        _statuses(BS, BV, R, t, False, agrid)
         # Counters are cleared where the last pose set them; face stamps are unique per pose
         # (ip * mb + s), so neither needs a pass over a whole mesh.
         for k in range(nrec[0]):
