@@ -114,6 +114,26 @@ def test_coincident_faces_fall_back_to_the_boolean():
     assert ex.stats["poses_boolean"] == 2
 
 
+def test_edges_passing_near_each_other_match_the_boolean():
+    # An object edge passing within `gap` of a hand edge puts the ends of two faces' crossing
+    # segments within rounding of each other: the floating-point decision on the planes'
+    # common line must hand such pairs to the exact test (or the boolean), never guess.
+    hand = box([0, 0, 0], [1, 1, 1])
+    obj = box([-0.5, -0.5, -0.5], [0.5, 0.5, 0.5])
+    R = Rotation.from_euler("xyz", [45, 30, 10], degrees=True).as_matrix()
+    mid = R @ np.array([0.0, -0.5, -0.5])  # midpoint of the object's edge along x
+    gaps = (0.0, 1e-15, 1e-13, 1e-11, 1e-9, 1e-6, 1e-3)
+    P = np.tile(np.eye(4), (len(gaps), 1, 1))
+    P[:, :3, :3] = R
+    for i, g in enumerate(gaps):
+        P[i, :3, 3] = np.array([0.5, g, 0.0]) - mid
+    ex = ExactIntersector([hand], [obj], broadphase=None)
+    got = ex.volumes(P)
+    want = plain_volumes([hand], [obj], P)
+    assert np.all(want > 0.01)
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=0)
+
+
 def test_random_convex_polytopes_match_halfspace_intersection():
     rng = np.random.default_rng(7)
     for _ in range(6):
