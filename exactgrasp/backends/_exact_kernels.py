@@ -263,18 +263,21 @@ def surface_cells_in(table, n, rng):
 @njit(cache=True, nogil=True, error_model="numpy")
 def point_status(x, lo, h, n, status):
     """Inside (1) / outside (0) from the grid's cell statuses; -1 when x is in a surface cell."""
-    return point_status_xyz(x[0], x[1], x[2], lo, h, n, status)
+    c = cell_index(x[0], x[1], x[2], lo[0], lo[1], lo[2], h, n[0], n[1], n[2])
+    return 0 if c < 0 else status[c]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def point_status_xyz(x, y, z, lo, h, n, status):
-    """`point_status` of the point (x, y, z)."""
-    i = int(np.floor((x - lo[0]) / h))
-    j = int(np.floor((y - lo[1]) / h))
-    k = int(np.floor((z - lo[2]) / h))
-    if i < 0 or j < 0 or k < 0 or i >= n[0] or j >= n[1] or k >= n[2]:
-        return 0
-    return status[(i * n[1] + j) * n[2] + k]
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def cell_index(x, y, z, l0, l1, l2, h, n0, n1, n2):
+    """Flat index of the grid cell holding (x, y, z), or -1 outside the grid (lower corner
+    (l0, l1, l2), cell edge h, n* cells per axis). Scalars only, so that per-vertex loops can
+    inline it without reference counting the grid's arrays."""
+    i = int(np.floor((x - l0) / h))
+    j = int(np.floor((y - l1) / h))
+    k = int(np.floor((z - l2) / h))
+    if i < 0 or j < 0 or k < 0 or i >= n0 or j >= n1 or k >= n2:
+        return -1
+    return (i * n1 + j) * n2 + k
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
