@@ -103,6 +103,30 @@ def prepare_mesh(V: np.ndarray, F: np.ndarray) -> tuple:
     return (V, F, E, ET, TE, TO, adj_start, other[order].copy(), eid[order].copy())
 
 
+def grid_frame(V: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """Origin (3,) and cell counts (3,) of the grid `build_grid` lays over vertices V (n, 3)
+    with cubic cells of edge ``cell``: one cell of padding on every side."""
+    lo = V.min(0) - cell
+    return lo, np.ceil((V.max(0) + cell - lo) / cell).astype(np.int64) + 1
+
+
+def vertex_cells(V: np.ndarray, cell: float) -> np.ndarray:
+    """Flat index of the `build_grid` cell holding each vertex of V (n, 3): shape (n,), int64
+    (the same arithmetic as `_exact_kernels.cell_index`)."""
+    lo, n = grid_frame(V, cell)
+    ijk = np.clip(np.floor((V - lo) / cell).astype(np.int64), 0, n - 1)
+    return (ijk[:, 0] * n[1] + ijk[:, 1]) * n[2] + ijk[:, 2]
+
+
+def cell_order(V: np.ndarray, F: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """The same mesh with its vertices renumbered in the order of their `build_grid` cells
+    (stable), so that each cell's vertices are consecutive: (V (n, 3), F (m, 3))."""
+    order = np.argsort(vertex_cells(V, cell), kind="stable")
+    rank = np.empty(len(V), np.int64)
+    rank[order] = np.arange(len(V))
+    return np.ascontiguousarray(V[order]), np.ascontiguousarray(rank[F])
+
+
 def build_grid(V: np.ndarray, F: np.ndarray, cell: float) -> tuple:
     """A cubic-cell grid over a closed mesh, one cell of padding on every side.
 
@@ -123,8 +147,7 @@ def build_grid(V: np.ndarray, F: np.ndarray, cell: float) -> tuple:
     """
     from scipy import ndimage
 
-    lo = V.min(0) - cell
-    n = np.ceil((V.max(0) + cell - lo) / cell).astype(np.int64) + 1
+    lo, n = grid_frame(V, cell)
     margin = 1e-9 * cell
     cells, tris = raster_triangles(V, F, lo, float(cell), n, margin)
     ncell = int(np.prod(n))

@@ -56,68 +56,116 @@ def _spread(S, adj_start, adj_vert, adj_edge, cnt, queue, tail):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _next_unknown(S, start):
-    """The first vertex at or after ``start`` whose status is unknown (-1), or -1."""
-    for u in range(start, S.shape[0]):
-        if S[u] == -1:
-            return u
+def _next_unknown(S, start, reps, uniform):
+    """The first vertex at or after ``start`` whose status is unknown (-1), or -1. Parts
+    classified whole (``uniform``, see `_hand_statuses`) are known and skipped."""
+    for k in range(reps.shape[0] - 1):
+        if uniform[k] or reps[k + 1, 1] <= start:
+            continue
+        for u in range(max(start, reps[k, 1]), reps[k + 1, 1]):
+            if S[u] == -1:
+                return u
     return -1
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _resolve(S, adj_start, adj_vert, adj_edge, cnt, queue):
+def _resolve(S, adj_start, adj_vert, adj_edge, cnt, queue, reps, uniform):
     """Give every vertex of unknown status (-1) the status of a neighbour, flipped by the
     parity of the crossings on the edge between them. Returns the first vertex still unknown
-    (its component has no vertex of known status), or -1."""
+    (its component has no vertex of known status), or -1. Only the parts (``reps``, see
+    `ExactIntersector._cell_reps`) not classified whole (``uniform``) are searched."""
     tail = 0
-    for u in range(S.shape[0]):
-        if S[u] != -1:
+    for p in range(reps.shape[0] - 1):
+        if uniform[p]:
             continue
-        for k in range(adj_start[u], adj_start[u + 1]):
-            w = adj_vert[k]
-            if S[w] >= 0:
-                S[u] = S[w] ^ (cnt[adj_edge[k]] & 1)
-                queue[tail] = u
-                tail += 1
-                break
+        for u in range(reps[p, 1], reps[p + 1, 1]):
+            if S[u] != -1:
+                continue
+            for k in range(adj_start[u], adj_start[u + 1]):
+                w = adj_vert[k]
+                if S[w] >= 0:
+                    S[u] = S[w] ^ (cnt[adj_edge[k]] & 1)
+                    queue[tail] = u
+                    tail += 1
+                    break
     _spread(S, adj_start, adj_vert, adj_edge, cnt, queue, tail)
-    return _next_unknown(S, 0)
+    return _next_unknown(S, 0, reps, uniform)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _edge_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, adj_start, adj_vert, adj_edge):
-    """Σ_e W_e f_e over the edges of one mesh; returns (sum, consistent).
+def _edge_sum(
+    V, D, E, ET, S, cnt, Wpre, adj_start, adj_vert, adj_edge, adj_split, reps, uniform, wsum
+):
+    """Σ_e W_e over the edges of one mesh that nothing crosses and whose ends are inside;
+    returns (sum, consistent). ``Wpre`` holds precomputed weights (fixed mesh) or is empty
+    (weights computed here).
 
-    ``Wpre`` holds precomputed weights (fixed mesh) or is empty (weights computed here).
-    Consistency: each edge's end statuses must differ by the parity of its crossings. Only the
-    edges at inside vertices and the crossed edges are visited (an edge between two outside
-    vertices that nothing crosses adds nothing and is consistent), which checks every edge.
+    Consistency: an edge nothing crosses must have ends of one status. Only the edges at
+    inside vertices are visited (an edge between two outside vertices adds nothing and is
+    consistent), which checks every uncrossed edge. A part classified whole (``uniform``,
+    see `_hand_statuses`) that is inside adds its own edges' summed weight ``wsum`` (they are
+    uncrossed and consistent) and visits only its vertices' edges to other parts, which come
+    first in each vertex's adjacency, up to ``adj_split[u]``.
     """
     have = Wpre.shape[0] > 0
     total = 0.0
-    for u in range(S.shape[0]):
-        if S[u] != 1:
-            continue
-        for k in range(adj_start[u], adj_start[u + 1]):
-            e = adj_edge[k]
-            if cnt[e] != 0:
+    for p in range(reps.shape[0] - 1):
+        whole = uniform[p]
+        if whole:
+            if S[reps[p, 1]] != 1:
                 continue
-            w = adj_vert[k]
-            if S[w] != 1:
-                return 0.0, False
-            if u < w:
-                total += Wpre[e] if have else edge_weight(V, D, E, ET, e)
-    if nrec == 0:
+            total += wsum[p]
+        for u in range(reps[p, 1], reps[p + 1, 1]):
+            if S[u] != 1:
+                continue
+            for k in range(adj_start[u], adj_split[u] if whole else adj_start[u + 1]):
+                e = adj_edge[k]
+                if cnt[e] != 0:
+                    continue
+                w = adj_vert[k]
+                if S[w] != 1:
+                    return 0.0, False
+                if u < w:
+                    total += Wpre[e] if have else edge_weight(V, D, E, ET, e)
+    return total, True
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _crossed_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, multi):
+    """Σ_e W_e f_e over the crossed edges of one mesh, f_e the share of edge e inside the
+    other mesh (from the recorded crossing parameters ``rec_l`` of edges ``rec_e``, ``cnt[e]``
+    of them per edge); returns (sum, consistent): the end statuses of each edge must differ by
+    the parity of its crossings. ``Wpre`` holds precomputed weights (fixed mesh) or is empty.
+    An edge crossed once needs no sorting; the records of the others are gathered in
+    ``multi`` (scratch, at least ``nrec`` long) and sorted by edge."""
+    have = Wpre.shape[0] > 0
+    total = 0.0
+    nm = 0
+    for i in range(nrec):
+        e = rec_e[i]
+        if cnt[e] != 1:
+            multi[nm] = i
+            nm += 1
+            continue
+        s0 = S[E[e, 0]]
+        if S[E[e, 1]] == s0:
+            return 0.0, False
+        frac = rec_l[i] if s0 == 1 else 1.0 - rec_l[i]
+        total += frac * (Wpre[e] if have else edge_weight(V, D, E, ET, e))
+    if nm == 0:
         return total, True
-    order = np.argsort(rec_e[:nrec])
-    lam = np.empty(nrec)
+    key = np.empty(nm, np.int64)
+    for i in range(nm):
+        key[i] = rec_e[multi[i]]
+    order = np.argsort(key)
+    lam = np.empty(nm)
     i = 0
-    while i < nrec:
-        e = rec_e[order[i]]
+    while i < nm:
+        e = key[order[i]]
         j = i
-        while j < nrec and rec_e[order[j]] == e:
+        while j < nm and key[order[j]] == e:
             # Insertion sort: an edge rarely crosses the other surface more than twice.
-            x = rec_l[order[j]]
+            x = rec_l[multi[order[j]]]
             m = j - i
             while m > 0 and lam[m - 1] > x:
                 lam[m] = lam[m - 1]
@@ -510,38 +558,63 @@ def _near_chunks(chunks, R, t, agrid, margin, rng, near):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _statuses(S, V, R, t, inverse, grid):
+def _statuses(S, V, grid):
     """Status of every vertex of V in the other mesh's grid (1 inside, 0 outside, -1 in a cell
-    the other surface touches), the vertices moved into that mesh's frame by ``x -> R x + t``
-    or, with ``inverse``, by ``x -> R^T (x - t)``. One loop with scalar loads: a call per
-    vertex with the grid's arrays would cost atomic reference counts (`point_status` does
-    the same for one point)."""
+    the other surface touches), V being in that mesh's frame. One loop with scalar loads: a
+    call per vertex with the grid's arrays would cost atomic reference counts (`point_status`
+    does the same for one point)."""
+    lo, h, n, status = grid[0], grid[1], grid[2], grid[3]
+    l0, l1, l2, n0, n1, n2 = lo[0], lo[1], lo[2], n[0], n[1], n[2]
+    for i in range(V.shape[0]):
+        c = cell_index(V[i, 0], V[i, 1], V[i, 2], l0, l1, l2, h, n0, n1, n2)
+        S[i] = 0 if c < 0 else status[c]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _hand_statuses(S, V, R, t, grid, reps, cellmark, whole, uniform):
+    """`_statuses` of the hand's vertices in the object's grid, part by part (``reps``, see
+    `ExactIntersector._cell_reps`), the vertices moved by ``x -> R^T (x - t)``.
+
+    A part whose cell no object face reached (``cellmark`` False; with ``whole``) holds no
+    point of the object's surface: the convex region it bounds (cell ∩ its faces' box ∩
+    their slab, see `_object_faces`) is wholly inside or wholly outside, so the first vertex
+    found in a cell of known status gives every vertex's status (``uniform[k]`` True).
+    Other parts get a status per vertex (-1 where unknown)."""
     lo, h, n, status = grid[0], grid[1], grid[2], grid[3]
     l0, l1, l2, n0, n1, n2 = lo[0], lo[1], lo[2], n[0], n[1], n[2]
     r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
     r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
     r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
     t0, t1, t2 = t[0], t[1], t[2]
-    for i in range(V.shape[0]):
-        if inverse:
+    for k in range(reps.shape[0] - 1):
+        each = not (whole and not cellmark[reps[k, 0]])
+        st = -1
+        for i in range(reps[k, 1], reps[k + 1, 1]):
             d0, d1, d2 = V[i, 0] - t0, V[i, 1] - t1, V[i, 2] - t2
             x = r00 * d0 + r10 * d1 + r20 * d2
             y = r01 * d0 + r11 * d1 + r21 * d2
             z = r02 * d0 + r12 * d1 + r22 * d2
-        else:
-            x = V[i, 0]
-            y = V[i, 1]
-            z = V[i, 2]
-        c = cell_index(x, y, z, l0, l1, l2, h, n0, n1, n2)
-        S[i] = 0 if c < 0 else status[c]
+            c = cell_index(x, y, z, l0, l1, l2, h, n0, n1, n2)
+            si = 0 if c < 0 else status[c]
+            if each:
+                S[i] = si
+            elif si >= 0:
+                st = si
+                break
+        uniform[k] = not each and st >= 0
+        if not each:
+            for i in range(reps[k, 1], reps[k + 1, 1]):
+                S[i] = st
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, stats):
     """Volume of A ∩ (pose · B) for each pose; A (the hand) is fixed, B is in its own frame.
 
-    ``X = (AD, AN, ABB, AP, cell_rep, AW)`` holds per-face data of A (`face_terms`, bounding
-    boxes, unit plane), one vertex per surface cell of its grid and A's edge weights.
+    ``X = (AD, AN, ABB, AP, reps, AW, CBB, nxt, PT, epart, wsum, split)`` holds per-face
+    data of A (`face_terms`, bounding boxes, unit plane), its parts (grid cells holding
+    vertices, see `ExactIntersector._cell_reps`), A's edge weights, the search's tables
+    (`_object_faces`) and A's edges by part (`ExactIntersector._part_edges`).
     ``codes[i]`` is OK, DEGENERATE or OVERFLOW (the caller recomputes those with a boolean);
     ``stats[i]`` counts pairs tried, crossing pairs, and A's surface cells touched /
     untouched inside / untouched outside.
@@ -549,20 +622,27 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
     AV, AF, AE, AET = A[0], A[1], A[2], A[3]
     BV0, BF, BE, BET = B[0], B[1], B[2], B[3]
     AD = X[0]
-    cell_rep = X[4]
+    cell_rep, epart = X[4], X[9]
     ah, acs = agrid[1], agrid[4]
     na, nb = AV.shape[0], BV0.shape[0]
     mb = BF.shape[0]
     BV = np.empty_like(BV0)
     BD = np.empty((mb, 3))
     BN = np.empty((mb, 3))
-    AS = np.empty(na, np.int64)
-    BS = np.empty(nb, np.int64)
+    # Statuses in one byte each: the hand's are read at random by the edge walks.
+    AS = np.empty(na, np.int8)
+    uniform = np.zeros(cell_rep.shape[0] - 1, np.bool_)
+    BS = np.empty(nb, np.int8)
+    # The object is one part, never classified whole.
+    breps = np.array([[-1, 0], [-1, nb]], np.int64)
+    bwhole = np.zeros(1, np.bool_)
+    bsplit = B[6][1:]
     acnt = np.zeros(AE.shape[0], np.int64)
     bcnt = np.zeros(BE.shape[0], np.int64)
     arec = (np.empty(cap, np.int64), np.empty(cap))
     brec = (np.empty(cap, np.int64), np.empty(cap))
     nrec = np.zeros(2, np.int64)
+    multi = np.empty(cap, np.int64)
     stamp = np.full(AF.shape[0], -1, np.int64)
     cellmark = np.zeros(acs.shape[0] - 1, np.bool_)
     queue = np.empty(max(na, nb), np.int64)
@@ -590,7 +670,7 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
     ptol = 1e-9 * ah
     # A bound on every coordinate (at least 1), for the pre-test's error bound.
     amax = max(1.0, np.abs(AV).max())
-    nparts = cell_rep.shape[0]
+    nparts = cell_rep.shape[0] - 1
     for ip in range(poses.shape[0]):
         R = poses[ip, :3, :3]
         t = poses[ip, :3, 3]
@@ -599,8 +679,7 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
                 BV[i, k] = R[k, 0] * BV0[i, 0] + R[k, 1] * BV0[i, 1] + R[k, 2] * BV0[i, 2] + t[k]
         face_terms(BV, BF, tiny, BD, BN)
         gscale = max(amax, np.abs(BV).max())
-        _statuses(AS, AV, R, t, True, bgrid)
-        _statuses(BS, BV, R, t, False, agrid)
+        _statuses(BS, BV, agrid)
         # Counters are cleared where the last pose set them; face stamps are unique per pose
         # (ip * mb + s), so neither needs a pass over a whole mesh.
         for k in range(nrec[0]):
@@ -613,8 +692,15 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
         seg, ncross, npairs, code = _object_faces(
             A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, ip * mb, near
         )
+        # After the search: the cells it marked tell which parts are classified whole.
+        _hand_statuses(AS, AV, R, t, bgrid, cell_rep, cellmark, code == OK, uniform)
+        for k in range(nrec[0]):
+            # Never happens (a crossed edge's cell is marked); guards the part sums.
+            p = epart[arec[0][k]]
+            if p >= 0 and uniform[p]:
+                code = DEGENERATE
         if code == OK:
-            u = _resolve(AS, A[6], A[7], A[8], acnt, queue)
+            u = _resolve(AS, A[6], A[7], A[8], acnt, queue, cell_rep, uniform)
             while u >= 0 and code == OK:
                 # A component with no vertex of known status (a small shell wholly in cells
                 # the object's surface touches): one exact point test in the object's frame.
@@ -631,9 +717,9 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
                 else:
                     queue[0] = u
                     _spread(AS, A[6], A[7], A[8], acnt, queue, 1)
-                    u = _next_unknown(AS, u + 1)
+                    u = _next_unknown(AS, u + 1, cell_rep, uniform)
         if code == OK:
-            u = _resolve(BS, B[6], B[7], B[8], bcnt, queue)
+            u = _resolve(BS, B[6], B[7], B[8], bcnt, queue, breps, bwhole)
             while u >= 0 and code == OK:
                 token += 1
                 BS[u] = ray_status(BV[u], AV, AF, agrid, astamp, token)
@@ -642,23 +728,30 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
                 else:
                     queue[0] = u
                     _spread(BS, B[6], B[7], B[8], bcnt, queue, 1)
-                    u = _next_unknown(BS, u + 1)
+                    u = _next_unknown(BS, u + 1, breps, bwhole)
         if code == OK:
             sa_, oka = _edge_sum(
-                AV, AD, AE, AET, AS, acnt, arec[0], arec[1], nrec[0], X[5], A[6], A[7], A[8]
+                AV, AD, AE, AET, AS, acnt, X[5], A[6], A[7], A[8], X[11], cell_rep, uniform,
+                X[10],
+            )  # fmt: skip
+            sa2, oka2 = _crossed_sum(
+                AV, AD, AE, AET, AS, acnt, arec[0], arec[1], nrec[0], X[5], multi
             )
             sb_, okb = _edge_sum(
-                BV, BD, BE, BET, BS, bcnt, brec[0], brec[1], nrec[1], noW, B[6], B[7], B[8]
+                BV, BD, BE, BET, BS, bcnt, noW, B[6], B[7], B[8], bsplit, breps, bwhole, noW
             )
-            if not (oka and okb):
+            sb2, okb2 = _crossed_sum(
+                BV, BD, BE, BET, BS, bcnt, brec[0], brec[1], nrec[1], noW, multi
+            )
+            if not (oka and oka2 and okb and okb2):
                 code = DEGENERATE
-            out[ip] = sa_ + sb_ + seg
+            out[ip] = sa_ + sa2 + sb_ + sb2 + seg
         codes[ip] = code
         stats[ip, STAT_PAIRS] = npairs
         stats[ip, STAT_CROSSING] = ncross
         touched = 0
         inside = 0
-        for k in range(cell_rep.shape[0]):
+        for k in range(nparts):
             if cellmark[cell_rep[k, 0]]:
                 touched += 1
             elif AS[cell_rep[k, 1]] == 1:

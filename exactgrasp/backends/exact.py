@@ -26,10 +26,12 @@ import numpy as np
 from exactgrasp.backends import _exact_pose as kp
 from exactgrasp.backends._exact_geometry import (
     build_grid,
+    cell_order,
     mesh_arrays,
     prepare_mesh,
     to_manifold,
     union,
+    vertex_cells,
 )
 from exactgrasp.backends._exact_kernels import face_terms, point_status, winding_number
 from exactgrasp.backends.base import Backend, check_poses
@@ -240,12 +242,15 @@ class ExactIntersector:
         self.object_volume = float(self.object_solid.volume())
         AV, AF = mesh_arrays(self.hand_solid)
         BV, BF = mesh_arrays(self.object_solid)
-        self._A = prepare_mesh(AV, AF)
-        self._B = prepare_mesh(BV, BF)
         # Cells scale with each mesh (units-free); 1/48 of the extent measured best on the
         # Barrett hand (0.1 canonical units).
         hand_cell = tuning.get("hand_cell") or np.ptp(AV, axis=0).max() / 48
         object_cell = tuning.get("object_cell") or np.ptp(BV, axis=0).max() / 48
+        # The hand's vertices numbered cell by cell: each "part" (grid cell holding vertices)
+        # is then a range of vertices that the kernel can classify as a whole.
+        AV, AF = cell_order(AV, AF, float(hand_cell))
+        self._A = prepare_mesh(AV, AF)
+        self._B = prepare_mesh(BV, BF)
         self._agrid = build_grid(AV, AF, float(hand_cell))
         self._bgrid = build_grid(BV, BF, float(object_cell))
         self._bchunks = _face_runs(BV, BF, kp.CHUNK)
@@ -268,9 +273,11 @@ class ExactIntersector:
         # The bounding boxes again in the order of the grid's cell lists, so that the search
         # reads them sequentially.
         CBB = np.ascontiguousarray(ABB[self._agrid[5]])
+        reps = self._cell_reps(AV)
+        epart, wsum, split = self._part_edges(reps, AW)
         self._X = (
-            AD, AN, ABB, AP, self._cell_reps(AV), AW, CBB, self._next_listed(),
-            self._cell_patches(AV, AF, AN, ABB),
+            AD, AN, ABB, AP, reps, AW, CBB, self._next_listed(),
+            self._cell_patches(AV, AF, AN, ABB), epart, wsum, split,
         )  # fmt: skip
         # Surfaces farther apart than this are certainly disjoint whatever the BVH's rounding.
         self._gap = 1e-7 * scale
@@ -291,13 +298,37 @@ class ExactIntersector:
         self.stats: dict[str, Any] = {}
 
     def _cell_reps(self, AV: np.ndarray) -> np.ndarray:
-        """The hand grid cells holding a vertex (the "parts" of the statistics) and the first
-        vertex in each: shape (parts, 2), columns (flat cell index, vertex index)."""
-        lo, h, n = self._agrid[0], self._agrid[1], self._agrid[2]
-        ijk = np.clip(np.floor((AV - lo) / h).astype(np.int64), 0, n - 1)
-        flat = (ijk[:, 0] * n[1] + ijk[:, 1]) * n[2] + ijk[:, 2]
-        cells, first = np.unique(flat, return_index=True)
-        return np.ascontiguousarray(np.stack([cells, first], axis=1).astype(np.int64))
+        """The hand grid cells holding a vertex (the "parts") and the first vertex in each:
+        shape (parts + 1, 2), columns (flat cell index, vertex index), in cell order; the
+        vertices being numbered cell by cell, part k holds vertices ``reps[k, 1]`` to
+        ``reps[k + 1, 1] - 1``. The last row is (-1, number of vertices)."""
+        cells, first = np.unique(vertex_cells(AV, self._agrid[1]), return_index=True)
+        if np.any(np.diff(first) <= 0):
+            raise AssertionError("hand vertices are not numbered cell by cell")
+        return np.ascontiguousarray(
+            np.stack([np.append(cells, -1), np.append(first, len(AV))], axis=1).astype(np.int64)
+        )
+
+    def _part_edges(self, reps: np.ndarray, AW: np.ndarray) -> tuple:
+        """The hand's edges by part (see `kp._edge_sum`): the part of each edge (e,), -1 where
+        its ends lie in two parts; the summed weight of each part's own edges (parts,); and,
+        the hand's vertex adjacency being reordered here so that each vertex lists its edges
+        to other parts first, where those end (vertices,)."""
+        V, E, adj_start, adj_vert, adj_edge = (self._A[k] for k in (0, 2, 6, 7, 8))
+        nparts = len(reps) - 1
+        part = np.searchsorted(reps[:-1, 1], np.arange(len(V)), side="right") - 1
+        same = part[E[:, 0]] == part[E[:, 1]]
+        epart = np.where(same, part[E[:, 0]], -1).astype(np.int64)
+        wsum = np.bincount(epart[same], weights=AW[same], minlength=nparts)
+        owner = np.repeat(np.arange(len(V)), np.diff(adj_start))
+        order = np.lexsort((same[adj_edge], owner))
+        self._A = (
+            *self._A[:7],
+            np.ascontiguousarray(adj_vert[order]),
+            np.ascontiguousarray(adj_edge[order]),
+        )
+        split = adj_start[:-1] + np.bincount(owner[~same[adj_edge]], minlength=len(V))
+        return epart, wsum, split.astype(np.int64)
 
     def _next_listed(self) -> np.ndarray:
         """Per axis d and hand grid cell: the index along d of the first cell at or after it,
@@ -448,7 +479,7 @@ class ExactIntersector:
             "poses_repeated": len(every) - n,
             "poses_culled": int((codes == kp.CULLED).sum()),
             "poses_boolean": int(((codes == kp.DEGENERATE) | (codes == kp.OVERFLOW)).sum()),
-            "parts": len(self._X[4]),
+            "parts": len(self._X[4]) - 1,
             "parts_culled": int(tot[kp.STAT_CELLS_OUTSIDE]),
             "parts_inside": int(tot[kp.STAT_CELLS_INSIDE]),
             "parts_clipped": int(tot[kp.STAT_CELLS_TOUCHED]),
