@@ -259,7 +259,7 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
     BTE, BTO = B[4], B[5]
     AD, AN, CBB, AP, nxt, PT = X[0], X[1], X[6], X[3], X[7], X[8]
     alo, ah, an, acs, act, atable = agrid[0], agrid[1], agrid[2], agrid[4], agrid[5], agrid[6]
-    acnt, bcnt, arec, brec, nrec, stamp, P, sg, dt, rng, cellmark = W
+    acnt, bcnt, arec, brec, nrec, stamp, P, sg, dt, rng, cellmark, buf = W
     arec_e, arec_l, brec_e, brec_l = arec[0], arec[1], brec[0], brec[1]
     cap = arec_e.shape[0]
     BF = B[1]
@@ -288,6 +288,8 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
         nrm = np.sqrt(BN[s, 0] ** 2 + BN[s, 1] ** 2 + BN[s, 2] ** 2)
         inv = 1.0 / nrm if nrm > 0 else 0.0
         nx, ny, nz = BN[s, 0] * inv, BN[s, 1] * inv, BN[s, 2] * inv
+        hx, hy, hz = 0.5 * nx, 0.5 * ny, 0.5 * nz
+        ax, ay, az = abs(hx), abs(hy), abs(hz)
         sd = nx * sa0 + ny * sa1 + nz * sa2
         # Walk the columns along the normal's dominant axis d and visit only the cells the face's
         # plane passes through (with a margin); the separating-axis test then decides.
@@ -333,68 +335,56 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                     # surface is nearly flat), the face's own normal against that box, and last
                     # the cell itself (`tri_box`): a crossing outside this cell is found in
                     # another cell that both faces touch.
-                    if (
-                        PT[c, 5] > smax0
-                        or PT[c, 8] < smin0
-                        or PT[c, 6] > smax1
-                        or PT[c, 9] < smin1
-                        or PT[c, 7] > smax2
-                        or PT[c, 10] < smin2
-                    ):
-                        continue
+                    # One branch for all of them (each alone would often mispredict).
+                    x0, y0, z0 = PT[c, 5], PT[c, 6], PT[c, 7]
+                    x1, y1, z1 = PT[c, 8], PT[c, 9], PT[c, 10]
                     pa0 = PT[c, 0] * sa0 + PT[c, 1] * sa1 + PT[c, 2] * sa2
                     pa1 = PT[c, 0] * sb0 + PT[c, 1] * sb1 + PT[c, 2] * sb2
                     pa2 = PT[c, 0] * sc0 + PT[c, 1] * sc1 + PT[c, 2] * sc2
-                    if min(pa0, pa1, pa2) > PT[c, 4] or max(pa0, pa1, pa2) < PT[c, 3]:
-                        continue
-                    reach = 0.5 * (
-                        abs(nx) * (PT[c, 8] - PT[c, 5])
-                        + abs(ny) * (PT[c, 9] - PT[c, 6])
-                        + abs(nz) * (PT[c, 10] - PT[c, 7])
+                    ok = (
+                        (x0 <= smax0)
+                        & (x1 >= smin0)
+                        & (y0 <= smax1)
+                        & (y1 >= smin1)
+                        & (z0 <= smax2)
+                        & (z1 >= smin2)
+                        & (min(pa0, pa1, pa2) <= PT[c, 4])
+                        & (max(pa0, pa1, pa2) >= PT[c, 3])
+                        & (
+                            abs(hx * (x0 + x1) + hy * (y0 + y1) + hz * (z0 + z1) - sd)
+                            <= ax * (x1 - x0) + ay * (y1 - y0) + az * (z1 - z0) + margin
+                        )
                     )
-                    mid = 0.5 * (
-                        nx * (PT[c, 5] + PT[c, 8])
-                        + ny * (PT[c, 6] + PT[c, 9])
-                        + nz * (PT[c, 7] + PT[c, 10])
-                    )
-                    if abs(mid - sd) > reach + margin:
+                    if not ok:
                         continue
                     if not tri_box_xyz(
                         cen[0], cen[1], cen[2], hh, sa0, sa1, sa2, sb0, sb1, sb2, sc0, sc1, sc2
                     ):
                         continue
                     cellmark[c] = True
+                    # The listed faces' boxes against the object face's box and plane, without
+                    # branches (half of them pass: a branch per test would mispredict); the
+                    # survivors are gathered in `buf`.
+                    m = 0
                     for q in range(acs[c], acs[c + 1]):
-                        if (
-                            CBB[q, 0] > smax0
-                            or CBB[q, 3] < smin0
-                            or CBB[q, 1] > smax1
-                            or CBB[q, 4] < smin1
-                            or CBB[q, 2] > smax2
-                            or CBB[q, 5] < smin2
-                        ):
-                            continue
-                        # The face's box against the object face's plane (read in cell order,
-                        # before the face's own corners are fetched).
-                        if (
-                            abs(
-                                0.5
-                                * (
-                                    nx * (CBB[q, 0] + CBB[q, 3])
-                                    + ny * (CBB[q, 1] + CBB[q, 4])
-                                    + nz * (CBB[q, 2] + CBB[q, 5])
-                                )
-                                - sd
+                        x0, y0, z0 = CBB[q, 0], CBB[q, 1], CBB[q, 2]
+                        x1, y1, z1 = CBB[q, 3], CBB[q, 4], CBB[q, 5]
+                        ok = (
+                            (x0 <= smax0)
+                            & (x1 >= smin0)
+                            & (y0 <= smax1)
+                            & (y1 >= smin1)
+                            & (z0 <= smax2)
+                            & (z1 >= smin2)
+                            & (
+                                abs(hx * (x0 + x1) + hy * (y0 + y1) + hz * (z0 + z1) - sd)
+                                <= ax * (x1 - x0) + ay * (y1 - y0) + az * (z1 - z0) + 2.0 * ptol
                             )
-                            > 0.5
-                            * (
-                                abs(nx) * (CBB[q, 3] - CBB[q, 0])
-                                + abs(ny) * (CBB[q, 4] - CBB[q, 1])
-                                + abs(nz) * (CBB[q, 5] - CBB[q, 2])
-                            )
-                            + 2.0 * ptol
-                        ):
-                            continue
+                        )
+                        buf[m] = q
+                        m += 1 if ok else 0
+                    for j in range(m):
+                        q = buf[j]
                         ft = act[q]
                         if stamp[ft] == stamp0 + s:
                             continue
@@ -405,15 +395,15 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                         e0 = AV[v0, 0] * nx + AV[v0, 1] * ny + AV[v0, 2] * nz - sd
                         e1 = AV[v1, 0] * nx + AV[v1, 1] * ny + AV[v1, 2] * nz - sd
                         e2 = AV[v2, 0] * nx + AV[v2, 1] * ny + AV[v2, 2] * nz - sd
-                        if (e0 > ptol and e1 > ptol and e2 > ptol) or (
-                            e0 < -ptol and e1 < -ptol and e2 < -ptol
+                        if ((e0 > ptol) & (e1 > ptol) & (e2 > ptol)) | (
+                            (e0 < -ptol) & (e1 < -ptol) & (e2 < -ptol)
                         ):
                             continue
                         f0 = sa0 * AP[ft, 0] + sa1 * AP[ft, 1] + sa2 * AP[ft, 2] - AP[ft, 3]
                         f1 = sb0 * AP[ft, 0] + sb1 * AP[ft, 1] + sb2 * AP[ft, 2] - AP[ft, 3]
                         f2 = sc0 * AP[ft, 0] + sc1 * AP[ft, 1] + sc2 * AP[ft, 2] - AP[ft, 3]
-                        if (f0 > ptol and f1 > ptol and f2 > ptol) or (
-                            f0 < -ptol and f1 < -ptol and f2 < -ptol
+                        if ((f0 > ptol) & (f1 > ptol) & (f2 > ptol)) | (
+                            (f0 < -ptol) & (f1 < -ptol) & (f2 < -ptol)
                         ):
                             continue
                         # Both planes straddled and every vertex clear of the other plane:
@@ -663,6 +653,7 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
         np.empty((2, 3)),
         np.empty((3, 2), np.int64),
         cellmark,
+        np.empty(max(1, np.max(acs[1:] - acs[:-1])), np.int64),
     )
     noW = np.empty(0)
     margin = 1e-9 * ah
