@@ -147,14 +147,14 @@ def winding_number(x, V, F):
     return total / (4.0 * np.pi)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _sep(ax, ay, az, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh):
     """Is axis (ax, ay, az) separating a triangle and the cube [-hh, hh]^3?"""
     p0 = ax * x0 + ay * y0 + az * z0
     p1 = ax * x1 + ay * y1 + az * z1
     p2 = ax * x2 + ay * y2 + az * z2
     r = hh * (abs(ax) + abs(ay) + abs(az))
-    return min(p0, p1, p2) > r or max(p0, p1, p2) < -r
+    return (min(p0, p1, p2) > r) | (max(p0, p1, p2) < -r)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -165,7 +165,9 @@ def tri_box(cx, cy, cz, hh, a, b, c):
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def tri_box_xyz(cx, cy, cz, hh, ax, ay, az, bx, by, bz, qx, qy, qz):
-    """`tri_box` with the triangle's corners as scalars (no array views in hot loops)."""
+    """`tri_box` with the triangle's corners as scalars (no array views in hot loops). The
+    cross-product axes and the normal are tested together, with one branch: alone, their
+    outcomes are hard to predict."""
     x0, y0, z0 = ax - cx, ay - cy, az - cz
     x1, y1, z1 = bx - cx, by - cy, bz - cz
     x2, y2, z2 = qx - cx, qy - cy, qz - cz
@@ -175,25 +177,23 @@ def tri_box_xyz(cx, cy, cz, hh, ax, ay, az, bx, by, bz, qx, qy, qz):
         return False
     if min(z0, z1, z2) > hh or max(z0, z1, z2) < -hh:
         return False
-    for e in range(3):
-        if e == 0:
-            ex, ey, ez = x1 - x0, y1 - y0, z1 - z0
-        elif e == 1:
-            ex, ey, ez = x2 - x1, y2 - y1, z2 - z1
-        else:
-            ex, ey, ez = x0 - x2, y0 - y2, z0 - z2
-        if _sep(0.0, -ez, ey, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh):
-            return False
-        if _sep(ez, 0.0, -ex, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh):
-            return False
-        if _sep(-ey, ex, 0.0, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh):
-            return False
     e0x, e0y, e0z = x1 - x0, y1 - y0, z1 - z0
     e1x, e1y, e1z = x2 - x1, y2 - y1, z2 - z1
+    e2x, e2y, e2z = x0 - x2, y0 - y2, z0 - z2
+    out = False
+    out |= _sep(0.0, -e0z, e0y, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
+    out |= _sep(e0z, 0.0, -e0x, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
+    out |= _sep(-e0y, e0x, 0.0, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
+    out |= _sep(0.0, -e1z, e1y, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
+    out |= _sep(e1z, 0.0, -e1x, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
+    out |= _sep(-e1y, e1x, 0.0, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
+    out |= _sep(0.0, -e2z, e2y, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
+    out |= _sep(e2z, 0.0, -e2x, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
+    out |= _sep(-e2y, e2x, 0.0, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
     nx = e0y * e1z - e0z * e1y
     ny = e0z * e1x - e0x * e1z
     nz = e0x * e1y - e0y * e1x
-    return not _sep(nx, ny, nz, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
+    return not (out | _sep(nx, ny, nz, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
