@@ -157,6 +157,16 @@ def _sep(ax, ay, az, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh):
     return (min(p0, p1, p2) > r) | (max(p0, p1, p2) < -r)
 
 
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _sep2(a, b, p, q, r, s, hh):
+    """Is the axis with components (a, b) in two coordinates (0 in the third) separating a
+    triangle whose corners project to a p + b q and a r + b s, and the cube [-hh, hh]^3?"""
+    p0 = a * p + b * q
+    p1 = a * r + b * s
+    rad = hh * (abs(a) + abs(b))
+    return (min(p0, p1) > rad) | (max(p0, p1) < -rad)
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def tri_box(cx, cy, cz, hh, a, b, c):
     """Separating-axis test: does triangle abc touch the cube of half-size hh at (cx, cy, cz)?"""
@@ -180,16 +190,13 @@ def tri_box_xyz(cx, cy, cz, hh, ax, ay, az, bx, by, bz, qx, qy, qz):
     e0x, e0y, e0z = x1 - x0, y1 - y0, z1 - z0
     e1x, e1y, e1z = x2 - x1, y2 - y1, z2 - z1
     e2x, e2y, e2z = x0 - x2, y0 - y2, z0 - z2
-    out = False
-    out |= _sep(0.0, -e0z, e0y, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
-    out |= _sep(e0z, 0.0, -e0x, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
-    out |= _sep(-e0y, e0x, 0.0, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
-    out |= _sep(0.0, -e1z, e1y, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
-    out |= _sep(e1z, 0.0, -e1x, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
-    out |= _sep(-e1y, e1x, 0.0, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
-    out |= _sep(0.0, -e2z, e2y, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
-    out |= _sep(e2z, 0.0, -e2x, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
-    out |= _sep(-e2y, e2x, 0.0, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh)
+    # Edge k × a coordinate axis: edge k's two ends project to one value, so its start
+    # and the opposite corner suffice.
+    out = _sep2(-e0z, e0y, y0, z0, y2, z2, hh) | _sep2(e0z, -e0x, x0, z0, x2, z2, hh)
+    out |= _sep2(-e0y, e0x, x0, y0, x2, y2, hh) | _sep2(-e1z, e1y, y1, z1, y0, z0, hh)
+    out |= _sep2(e1z, -e1x, x1, z1, x0, z0, hh) | _sep2(-e1y, e1x, x1, y1, x0, y0, hh)
+    out |= _sep2(-e2z, e2y, y2, z2, y1, z1, hh) | _sep2(e2z, -e2x, x2, z2, x1, z1, hh)
+    out |= _sep2(-e2y, e2x, x2, y2, x1, y1, hh)
     nx = e0y * e1z - e0z * e1y
     ny = e0z * e1x - e0x * e1z
     nz = e0x * e1y - e0y * e1x
