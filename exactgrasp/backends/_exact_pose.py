@@ -195,11 +195,6 @@ def _sgn(x):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _span(a, b, c, d, e, f):
-    return max(a, b, c, d, e, f) - min(a, b, c, d, e, f)
-
-
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _lone(d0, d1, d2):
     """Index of the vertex alone on its side of a plane (signed distances d*, none zero,
     not all of one sign): the two edges from it are the ones that cross the plane."""
@@ -223,13 +218,13 @@ def _on_line(x0, x1, x2, d0, d1, d2, k, ext):
         xk, xi, xj, dk, di, dj = x1, x2, x0, d1, d2, d0
     else:
         xk, xi, xj, dk, di, dj = x2, x0, x1, d2, d0, d1
-    ai = abs(dk) + abs(di)
-    aj = abs(dk) + abs(dj)
-    a = xk + (xi - xk) * (abs(dk) / ai)
-    b = xk + (xj - xk) * (abs(dk) / aj)
+    ri = 1.0 / (abs(dk) + abs(di))
+    rj = 1.0 / (abs(dk) + abs(dj))
+    a = xk + (xi - xk) * (abs(dk) * ri)
+    b = xk + (xj - xk) * (abs(dk) * rj)
     # The crossing parameters err by about (error of the distances) / (ai or aj), which moves
     # the points by up to ext times that; 1e-11 is far above double rounding here.
-    return a, b, 1e-11 * (1.0 + ext / min(ai, aj))
+    return a, b, 1e-11 * (1.0 + ext * max(ri, rj))
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
@@ -421,10 +416,12 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                             t0x, t0y, t0z = AV[v0, 0], AV[v0, 1], AV[v0, 2]
                             t1x, t1y, t1z = AV[v1, 0], AV[v1, 1], AV[v1, 2]
                             t2x, t2y, t2z = AV[v2, 0], AV[v2, 1], AV[v2, 2]
+                            # Extent of the six corners, bounded by the union of the faces'
+                            # boxes (the hand face's is in cache from the box test).
                             ext = max(
-                                _span(t0x, t1x, t2x, sa0, sb0, sc0),
-                                _span(t0y, t1y, t2y, sa1, sb1, sc1),
-                                _span(t0z, t1z, t2z, sa2, sb2, sc2),
+                                max(smax0, CBB[q, 3]) - min(smin0, CBB[q, 0]),
+                                max(smax1, CBB[q, 4]) - min(smin1, CBB[q, 1]),
+                                max(smax2, CBB[q, 5]) - min(smin2, CBB[q, 2]),
                             )
                             kt = _lone(e0, e1, e2)
                             at, bt, errt = _on_line(
