@@ -205,12 +205,14 @@ def tri_box_xyz(cx, cy, cz, hh, ax, ay, az, bx, by, bz, qx, qy, qz):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def tri_cell_range(V, F, f, lo, h, n, margin, rng):
-    """Grid-index range of triangle f's bounding box (clipped); False when outside the grid."""
+    """Grid-index range of triangle f's bounding box (clipped); False when outside the grid.
+    (Products with 1 / h, not quotients: the margin dwarfs the difference in rounding.)"""
+    ih = 1.0 / h
     for ax in range(3):
         x0 = min(V[F[f, 0], ax], V[F[f, 1], ax], V[F[f, 2], ax]) - margin
         x1 = max(V[F[f, 0], ax], V[F[f, 1], ax], V[F[f, 2], ax]) + margin
-        i0 = int(np.floor((x0 - lo[ax]) / h))
-        i1 = int(np.floor((x1 - lo[ax]) / h))
+        i0 = int(np.floor((x0 - lo[ax]) * ih))
+        i1 = int(np.floor((x1 - lo[ax]) * ih))
         if i1 < 0 or i0 >= n[ax]:
             return False
         rng[ax, 0] = max(i0, 0)
@@ -270,18 +272,20 @@ def surface_cells_in(table, n, rng):
 @njit(cache=True, nogil=True, error_model="numpy")
 def point_status(x, lo, h, n, status):
     """Inside (1) / outside (0) from the grid's cell statuses; -1 when x is in a surface cell."""
-    c = cell_index(x[0], x[1], x[2], lo[0], lo[1], lo[2], h, n[0], n[1], n[2])
+    c = cell_index(x[0], x[1], x[2], lo[0], lo[1], lo[2], 1.0 / h, n[0], n[1], n[2])
     return 0 if c < 0 else status[c]
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def cell_index(x, y, z, l0, l1, l2, h, n0, n1, n2):
+def cell_index(x, y, z, l0, l1, l2, ih, n0, n1, n2):
     """Flat index of the grid cell holding (x, y, z), or -1 outside the grid (lower corner
-    (l0, l1, l2), cell edge h, n* cells per axis). Scalars only, so that per-vertex loops can
-    inline it without reference counting the grid's arrays."""
-    i = int(np.floor((x - l0) / h))
-    j = int(np.floor((y - l1) / h))
-    k = int(np.floor((z - l2) / h))
+    (l0, l1, l2), inverse cell edge ih, n* cells per axis). Scalars only, so that per-vertex
+    loops can inline it without reference counting the grid's arrays. A point within rounding
+    of a cell's boundary may get either cell: a cell of known status lies at least the
+    rasterisation margin away from the surface, so either answer is right."""
+    i = int(np.floor((x - l0) * ih))
+    j = int(np.floor((y - l1) * ih))
+    k = int(np.floor((z - l2) * ih))
     if i < 0 or j < 0 or k < 0 or i >= n0 or j >= n1 or k >= n2:
         return -1
     return (i * n1 + j) * n2 + k

@@ -254,6 +254,7 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
     BTE, BTO = B[4], B[5]
     AD, AN, CBB, AP, nxt, PT = X[0], X[1], X[6], X[3], X[7], X[8]
     alo, ah, an, acs, act, atable = agrid[0], agrid[1], agrid[2], agrid[4], agrid[5], agrid[6]
+    iah = 1.0 / ah
     acnt, bcnt, arec, brec, nrec, stamp, P, sg, dt, rng, cellmark, buf = W
     arec_e, arec_l, brec_e, brec_l = arec[0], arec[1], brec[0], brec[1]
     cap = arec_e.shape[0]
@@ -315,8 +316,8 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                 d0, d1 = rng[d, 0], rng[d, 1]
                 if nrm > 0:
                     z = (za - nb_ * cen[b]) * inv_nd
-                    d0 = max(d0, int(np.floor((z - spread - slack - alo[d]) / ah)))
-                    d1 = min(d1, int(np.floor((z + spread + slack - alo[d]) / ah)))
+                    d0 = max(d0, int(np.floor((z - spread - slack - alo[d]) * iah)))
+                    d1 = min(d1, int(np.floor((z + spread + slack - alo[d]) * iah)))
                 base = ia * stride_a + ib * stride_b
                 # Only the cells holding hand faces: `nxt` jumps to the next one along d.
                 cur = nxt[d, base + d0 * stride_d] if d0 <= d1 else an[d]
@@ -529,13 +530,14 @@ def _near_chunks(chunks, R, t, agrid, margin, rng, near):
     sphere of each run (``chunks`` (k, 4): centre in the object's frame, radius), moved by
     ``x -> R x + t``, must hold a surface cell of the hand grid in its bounding box."""
     alo, ah, an, atable = agrid[0], agrid[1], agrid[2], agrid[6]
+    iah = 1.0 / ah
     for k in range(chunks.shape[0]):
         r = chunks[k, 3] + margin
         ok = True
         for d in range(3):
             m = R[d, 0] * chunks[k, 0] + R[d, 1] * chunks[k, 1] + R[d, 2] * chunks[k, 2] + t[d]
-            i0 = int(np.floor((m - r - alo[d]) / ah))
-            i1 = int(np.floor((m + r - alo[d]) / ah))
+            i0 = int(np.floor((m - r - alo[d]) * iah))
+            i1 = int(np.floor((m + r - alo[d]) * iah))
             if i1 < 0 or i0 >= an[d]:
                 ok = False
                 break
@@ -550,10 +552,10 @@ def _statuses(S, V, grid):
     the other surface touches), V being in that mesh's frame. One loop with scalar loads: a
     call per vertex with the grid's arrays would cost atomic reference counts (`point_status`
     does the same for one point)."""
-    lo, h, n, status = grid[0], grid[1], grid[2], grid[3]
+    lo, ih, n, status = grid[0], 1.0 / grid[1], grid[2], grid[3]
     l0, l1, l2, n0, n1, n2 = lo[0], lo[1], lo[2], n[0], n[1], n[2]
     for i in range(V.shape[0]):
-        c = cell_index(V[i, 0], V[i, 1], V[i, 2], l0, l1, l2, h, n0, n1, n2)
+        c = cell_index(V[i, 0], V[i, 1], V[i, 2], l0, l1, l2, ih, n0, n1, n2)
         S[i] = 0 if c < 0 else status[c]
 
 
@@ -567,7 +569,7 @@ def _hand_statuses(S, V, R, t, grid, reps, cellmark, whole, uniform):
     their slab, see `_object_faces`) is wholly inside or wholly outside, so the first vertex
     found in a cell of known status gives every vertex's status (``uniform[k]`` True).
     Other parts get a status per vertex (-1 where unknown)."""
-    lo, h, n, status = grid[0], grid[1], grid[2], grid[3]
+    lo, ih, n, status = grid[0], 1.0 / grid[1], grid[2], grid[3]
     l0, l1, l2, n0, n1, n2 = lo[0], lo[1], lo[2], n[0], n[1], n[2]
     r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
     r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
@@ -581,7 +583,7 @@ def _hand_statuses(S, V, R, t, grid, reps, cellmark, whole, uniform):
             x = r00 * d0 + r10 * d1 + r20 * d2
             y = r01 * d0 + r11 * d1 + r21 * d2
             z = r02 * d0 + r12 * d1 + r22 * d2
-            c = cell_index(x, y, z, l0, l1, l2, h, n0, n1, n2)
+            c = cell_index(x, y, z, l0, l1, l2, ih, n0, n1, n2)
             si = 0 if c < 0 else status[c]
             if each:
                 S[i] = si
