@@ -148,59 +148,63 @@ def winding_number(x, V, F):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _sep(ax, ay, az, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh):
-    """Is axis (ax, ay, az) separating a triangle and the cube [-hh, hh]^3?"""
+def _sep(ax, ay, az, x0, y0, z0, x1, y1, z1, x2, y2, z2, hx, hy, hz):
+    """Is axis (ax, ay, az) separating a triangle and the box [-h*, h*] (half sizes h*)?"""
     p0 = ax * x0 + ay * y0 + az * z0
     p1 = ax * x1 + ay * y1 + az * z1
     p2 = ax * x2 + ay * y2 + az * z2
-    r = hh * (abs(ax) + abs(ay) + abs(az))
+    r = hx * abs(ax) + hy * abs(ay) + hz * abs(az)
     return (min(p0, p1, p2) > r) | (max(p0, p1, p2) < -r)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _sep2(a, b, p, q, r, s, hh):
+def _sep2(a, b, p, q, r, s, ha, hb):
     """Is the axis with components (a, b) in two coordinates (0 in the third) separating a
-    triangle whose corners project to a p + b q and a r + b s, and the cube [-hh, hh]^3?"""
+    triangle whose corners project to a p + b q and a r + b s, and a box of half sizes
+    ha, hb in those coordinates?"""
     p0 = a * p + b * q
     p1 = a * r + b * s
-    rad = hh * (abs(a) + abs(b))
+    rad = ha * abs(a) + hb * abs(b)
     return (min(p0, p1) > rad) | (max(p0, p1) < -rad)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def tri_box(cx, cy, cz, hh, a, b, c):
     """Separating-axis test: does triangle abc touch the cube of half-size hh at (cx, cy, cz)?"""
-    return tri_box_xyz(cx, cy, cz, hh, a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2])
+    return tri_box_xyz(
+        cx, cy, cz, hh, hh, hh, a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]
+    )
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def tri_box_xyz(cx, cy, cz, hh, ax, ay, az, bx, by, bz, qx, qy, qz):
-    """`tri_box` with the triangle's corners as scalars (no array views in hot loops). The
-    cross-product axes and the normal are tested together, with one branch: alone, their
+def tri_box_xyz(cx, cy, cz, hx, hy, hz, ax, ay, az, bx, by, bz, qx, qy, qz):
+    """Does the triangle with corners (ax, ay, az), (bx, by, bz), (qx, qy, qz) touch the box of
+    centre (cx, cy, cz) and half sizes hx, hy, hz? Scalars only (no array views in hot loops).
+    The cross-product axes and the normal are tested together, with one branch: alone, their
     outcomes are hard to predict."""
     x0, y0, z0 = ax - cx, ay - cy, az - cz
     x1, y1, z1 = bx - cx, by - cy, bz - cz
     x2, y2, z2 = qx - cx, qy - cy, qz - cz
-    if min(x0, x1, x2) > hh or max(x0, x1, x2) < -hh:
+    if min(x0, x1, x2) > hx or max(x0, x1, x2) < -hx:
         return False
-    if min(y0, y1, y2) > hh or max(y0, y1, y2) < -hh:
+    if min(y0, y1, y2) > hy or max(y0, y1, y2) < -hy:
         return False
-    if min(z0, z1, z2) > hh or max(z0, z1, z2) < -hh:
+    if min(z0, z1, z2) > hz or max(z0, z1, z2) < -hz:
         return False
     e0x, e0y, e0z = x1 - x0, y1 - y0, z1 - z0
     e1x, e1y, e1z = x2 - x1, y2 - y1, z2 - z1
     e2x, e2y, e2z = x0 - x2, y0 - y2, z0 - z2
     # Edge k × a coordinate axis: edge k's two ends project to one value, so its start
     # and the opposite corner suffice.
-    out = _sep2(-e0z, e0y, y0, z0, y2, z2, hh) | _sep2(e0z, -e0x, x0, z0, x2, z2, hh)
-    out |= _sep2(-e0y, e0x, x0, y0, x2, y2, hh) | _sep2(-e1z, e1y, y1, z1, y0, z0, hh)
-    out |= _sep2(e1z, -e1x, x1, z1, x0, z0, hh) | _sep2(-e1y, e1x, x1, y1, x0, y0, hh)
-    out |= _sep2(-e2z, e2y, y2, z2, y1, z1, hh) | _sep2(e2z, -e2x, x2, z2, x1, z1, hh)
-    out |= _sep2(-e2y, e2x, x2, y2, x1, y1, hh)
+    out = _sep2(-e0z, e0y, y0, z0, y2, z2, hy, hz) | _sep2(e0z, -e0x, x0, z0, x2, z2, hx, hz)
+    out |= _sep2(-e0y, e0x, x0, y0, x2, y2, hx, hy) | _sep2(-e1z, e1y, y1, z1, y0, z0, hy, hz)
+    out |= _sep2(e1z, -e1x, x1, z1, x0, z0, hx, hz) | _sep2(-e1y, e1x, x1, y1, x0, y0, hx, hy)
+    out |= _sep2(-e2z, e2y, y2, z2, y1, z1, hy, hz) | _sep2(e2z, -e2x, x2, z2, x1, z1, hx, hz)
+    out |= _sep2(-e2y, e2x, x2, y2, x1, y1, hx, hy)
     nx = e0y * e1z - e0z * e1y
     ny = e0z * e1x - e0x * e1z
     nz = e0x * e1y - e0y * e1x
-    return not (out | _sep(nx, ny, nz, x0, y0, z0, x1, y1, z1, x2, y2, z2, hh))
+    return not (out | _sep(nx, ny, nz, x0, y0, z0, x1, y1, z1, x2, y2, z2, hx, hy, hz))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -262,7 +262,6 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
     seg = 0.0
     ncross = 0
     npairs = 0
-    cen = np.empty(3)
     for s in range(BF.shape[0]):
         if not near[s // CHUNK]:
             continue
@@ -299,7 +298,6 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
         nd = nx if d == 0 else (ny if d == 1 else nz)
         na_ = nx if a == 0 else (ny if a == 1 else nz)
         nb_ = nx if b == 0 else (ny if b == 1 else nz)
-        hh = 0.5 * ah + margin
         stride_a = an[1] * an[2] if a == 0 else (an[2] if a == 1 else 1)
         stride_b = an[1] * an[2] if b == 0 else (an[2] if b == 1 else 1)
         stride_d = an[1] * an[2] if d == 0 else (an[2] if d == 1 else 1)
@@ -309,13 +307,11 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
         spread = (abs(na_) + abs(nb_)) * abs(inv_nd) * (0.5 * ah + margin)
         slack = 1e-6 * ah
         for ia in range(rng[a, 0], rng[a, 1] + 1):
-            cen[a] = alo[a] + (ia + 0.5) * ah
-            za = sd - na_ * cen[a]
+            za = sd - na_ * (alo[a] + (ia + 0.5) * ah)
             for ib in range(rng[b, 0], rng[b, 1] + 1):
-                cen[b] = alo[b] + (ib + 0.5) * ah
                 d0, d1 = rng[d, 0], rng[d, 1]
                 if nrm > 0:
-                    z = (za - nb_ * cen[b]) * inv_nd
+                    z = (za - nb_ * (alo[b] + (ib + 0.5) * ah)) * inv_nd
                     d0 = max(d0, int(np.floor((z - spread - slack - alo[d]) * iah)))
                     d1 = min(d1, int(np.floor((z + spread + slack - alo[d]) * iah)))
                 base = ia * stride_a + ib * stride_b
@@ -323,15 +319,14 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                 cur = nxt[d, base + d0 * stride_d] if d0 <= d1 else an[d]
                 while cur <= d1:
                     c = base + cur * stride_d
-                    cen[d] = alo[d] + (cur + 0.5) * ah
                     cur = nxt[d, c + stride_d] if cur + 1 < an[d] else an[d]
-                    # Separating axes between the face and everything listed in the cell
-                    # (cheapest first): the coordinate axes against the listed faces' common
-                    # bounding box, the listed faces' mean normal (a thin slab where the hand's
-                    # surface is nearly flat), the face's own normal against that box, and last
-                    # the cell itself (`tri_box`): a crossing outside this cell is found in
-                    # another cell that both faces touch.
-                    # One branch for all of them (each alone would often mispredict).
+                    # Separating axes between the face and what the cell holds of the faces it
+                    # lists (cheapest first): the coordinate axes against the listed faces'
+                    # common bounding box clipped to the cell, the listed faces' mean normal (a
+                    # thin slab where the hand's surface is nearly flat), the face's own normal
+                    # against that box, all with one branch (each alone would often
+                    # mispredict); last the face's edges against the box (`tri_box`). A crossing
+                    # outside this cell is found in another cell that both faces touch.
                     x0, y0, z0 = PT[c, 5], PT[c, 6], PT[c, 7]
                     x1, y1, z1 = PT[c, 8], PT[c, 9], PT[c, 10]
                     pa0 = PT[c, 0] * sa0 + PT[c, 1] * sa1 + PT[c, 2] * sa2
@@ -354,8 +349,11 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                     if not ok:
                         continue
                     if not tri_box_xyz(
-                        cen[0], cen[1], cen[2], hh, sa0, sa1, sa2, sb0, sb1, sb2, sc0, sc1, sc2
-                    ):
+                        0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.5 * (z0 + z1),
+                        0.5 * (x1 - x0) + margin, 0.5 * (y1 - y0) + margin,
+                        0.5 * (z1 - z0) + margin,
+                        sa0, sa1, sa2, sb0, sb1, sb2, sc0, sc1, sc2,
+                    ):  # fmt: skip
                         continue
                     cellmark[c] = True
                     # The listed faces' boxes against the object face's box and plane, without

@@ -347,7 +347,8 @@ class ExactIntersector:
     def _cell_patches(self, AV, AF, AN, ABB) -> np.ndarray:
         """Per hand grid cell, bounds of the faces it lists, shape (cells, 11): a unit axis (the
         faces' area-weighted mean normal), the faces' extent along it (widened by 1e-9 of a cell
-        each way) and their common bounding box (min xyz, max xyz); see `_object_faces`."""
+        each way) and their common bounding box clipped to the cell (min xyz, max xyz); see
+        `_object_faces`."""
         h, cs, ct = self._agrid[1], self._agrid[4], self._agrid[5]
         ncell = len(cs) - 1
         cell = np.repeat(np.arange(ncell), np.diff(cs))
@@ -369,6 +370,12 @@ class ExactIntersector:
         for k in range(3):
             np.minimum.at(out[:, 5 + k], cell, ABB[ct, k])
             np.maximum.at(out[:, 8 + k], cell, ABB[ct, 3 + k])
+        # Clipped to the cell (grown by the kernel's margin): the part of the faces that the
+        # cell holds lies in this box, which the search tests each object face against.
+        lo, n = self._agrid[0], self._agrid[2]
+        corner = lo + np.stack(np.unravel_index(np.arange(ncell), tuple(n)), axis=1) * h
+        out[:, 5:8] = np.maximum(out[:, 5:8], corner - 1e-9 * h)
+        out[:, 8:] = np.minimum(out[:, 8:], corner + h + 1e-9 * h)
         return out
 
     def _contained(self, pose: np.ndarray) -> float:
