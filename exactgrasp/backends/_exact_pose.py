@@ -415,12 +415,11 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                             t0x, t0y, t0z = AV[v0, 0], AV[v0, 1], AV[v0, 2]
                             t1x, t1y, t1z = AV[v1, 0], AV[v1, 1], AV[v1, 2]
                             t2x, t2y, t2z = AV[v2, 0], AV[v2, 1], AV[v2, 2]
-                            # Extent of the six corners, bounded by the union of the faces'
-                            # boxes (the hand face's is in cache from the box test).
+                            # Extent of the six corners (the object face's by its box).
                             ext = max(
-                                max(smax0, CBB[q, 3]) - min(smin0, CBB[q, 0]),
-                                max(smax1, CBB[q, 4]) - min(smin1, CBB[q, 1]),
-                                max(smax2, CBB[q, 5]) - min(smin2, CBB[q, 2]),
+                                max(smax0, t0x, t1x, t2x) - min(smin0, t0x, t1x, t2x),
+                                max(smax1, t0y, t1y, t2y) - min(smin1, t0y, t1y, t2y),
+                                max(smax2, t0z, t1z, t2z) - min(smin2, t0z, t1z, t2z),
                             )
                             kt = _lone(e0, e1, e2)
                             at, bt, errt = _on_line(

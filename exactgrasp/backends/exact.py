@@ -271,8 +271,9 @@ class ExactIntersector:
             / 6.0
         )
         # The bounding boxes again in the order of the grid's cell lists, so that the search
-        # reads them sequentially.
-        CBB = np.ascontiguousarray(ABB[self._agrid[5]])
+        # reads them sequentially, each clipped to its cell (grown by the kernel's margin):
+        # a crossing in that cell lies in the clipped box.
+        CBB = self._cell_boxes(ABB)
         reps = self._cell_reps(AV)
         epart, wsum, split = self._part_edges(reps, AW)
         self._X = (
@@ -344,6 +345,21 @@ class ExactIntersector:
             out[d] = first.reshape(-1)
         return out
 
+    def _cell_corners(self) -> np.ndarray:
+        """Lower corner of every hand grid cell, shape (cells, 3)."""
+        lo, h, n = self._agrid[0], self._agrid[1], self._agrid[2]
+        return lo + np.stack(np.unravel_index(np.arange(np.prod(n)), tuple(n)), axis=1) * h
+
+    def _cell_boxes(self, ABB: np.ndarray) -> np.ndarray:
+        """The hand faces' bounding boxes (m, 6) in the order of the grid's cell lists, each
+        clipped to its cell grown by the kernel's margin: shape (listed, 6)."""
+        h, cs, ct = self._agrid[1], self._agrid[4], self._agrid[5]
+        corner = np.repeat(self._cell_corners(), np.diff(cs), axis=0)
+        out = ABB[ct]
+        out[:, :3] = np.maximum(out[:, :3], corner - 1e-9 * h)
+        out[:, 3:] = np.minimum(out[:, 3:], corner + h + 1e-9 * h)
+        return np.ascontiguousarray(out)
+
     def _cell_patches(self, AV, AF, AN, ABB) -> np.ndarray:
         """Per hand grid cell, bounds of the faces it lists, shape (cells, 11): a unit axis (the
         faces' area-weighted mean normal), the faces' extent along it (widened by 1e-9 of a cell
@@ -372,8 +388,7 @@ class ExactIntersector:
             np.maximum.at(out[:, 8 + k], cell, ABB[ct, 3 + k])
         # Clipped to the cell (grown by the kernel's margin): the part of the faces that the
         # cell holds lies in this box, which the search tests each object face against.
-        lo, n = self._agrid[0], self._agrid[2]
-        corner = lo + np.stack(np.unravel_index(np.arange(ncell), tuple(n)), axis=1) * h
+        corner = self._cell_corners()
         out[:, 5:8] = np.maximum(out[:, 5:8], corner - 1e-9 * h)
         out[:, 8:] = np.minimum(out[:, 8:], corner + h + 1e-9 * h)
         return out
