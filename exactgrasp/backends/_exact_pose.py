@@ -131,18 +131,23 @@ def _edge_sum(
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _crossed_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, multi):
+def _crossed_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, multi, epart, uniform):
     """Σ_e W_e f_e over the crossed edges of one mesh, f_e the share of edge e inside the
     other mesh (from the recorded crossing parameters ``rec_l`` of edges ``rec_e``, ``cnt[e]``
     of them per edge); returns (sum, consistent): the end statuses of each edge must differ by
     the parity of its crossings. ``Wpre`` holds precomputed weights (fixed mesh) or is empty.
     An edge crossed once needs no sorting; the records of the others are gathered in
-    ``multi`` (scratch, at least ``nrec`` long) and sorted by edge."""
+    ``multi`` (scratch, at least ``nrec`` long) and sorted by edge. With parts (``epart`` not
+    empty, see `_edge_sum`), an edge of a part classified whole must not be crossed (it never
+    is: the part's cell would be marked); that too counts as inconsistent."""
     have = Wpre.shape[0] > 0
+    parts = epart.shape[0] > 0
     total = 0.0
     nm = 0
     for i in range(nrec):
         e = rec_e[i]
+        if parts and epart[e] >= 0 and uniform[epart[e]]:
+            return 0.0, False
         if cnt[e] != 1:
             multi[nm] = i
             nm += 1
@@ -623,6 +628,7 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
     breps = np.array([[-1, 0], [-1, nb]], np.int64)
     bwhole = np.zeros(1, np.bool_)
     bsplit = B[6][1:]
+    noparts = np.empty(0, np.int64)
     acnt = np.zeros(AE.shape[0], np.int64)
     bcnt = np.zeros(BE.shape[0], np.int64)
     arec = (np.empty(cap, np.int64), np.empty(cap))
@@ -681,11 +687,6 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
         )
         # After the search: the cells it marked tell which parts are classified whole.
         _hand_statuses(AS, AV, R, t, bgrid, cell_rep, cellmark, code == OK, uniform)
-        for k in range(nrec[0]):
-            # Never happens (a crossed edge's cell is marked); guards the part sums.
-            p = epart[arec[0][k]]
-            if p >= 0 and uniform[p]:
-                code = DEGENERATE
         if code == OK:
             u = _resolve(AS, A[6], A[7], A[8], acnt, queue, cell_rep, uniform)
             while u >= 0 and code == OK:
@@ -722,14 +723,16 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
                 X[10],
             )  # fmt: skip
             sa2, oka2 = _crossed_sum(
-                AV, AD, AE, AET, AS, acnt, arec[0], arec[1], nrec[0], X[5], multi
-            )
+                AV, AD, AE, AET, AS, acnt, arec[0], arec[1], nrec[0], X[5], multi, epart,
+                uniform,
+            )  # fmt: skip
             sb_, okb = _edge_sum(
                 BV, BD, BE, BET, BS, bcnt, noW, B[6], B[7], B[8], bsplit, breps, bwhole, noW
             )
             sb2, okb2 = _crossed_sum(
-                BV, BD, BE, BET, BS, bcnt, brec[0], brec[1], nrec[1], noW, multi
-            )
+                BV, BD, BE, BET, BS, bcnt, brec[0], brec[1], nrec[1], noW, multi, noparts,
+                bwhole,
+            )  # fmt: skip
             if not (oka and oka2 and okb and okb2):
                 code = DEGENERATE
             out[ip] = sa_ + sa2 + sb_ + sb2 + seg
