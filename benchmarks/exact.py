@@ -4,9 +4,11 @@ For each grasp: seconds per descriptor (all poses; those equal to another to rou
 "repeats", are computed once), share of poses and hand parts culled, and
 the plain loop (one manifold3d boolean of the whole hand and the whole object per pose) timed
 in the same run on a subsample of poses, with the largest relative difference between the two.
+Both timings are the median of ``--repeat`` runs (3 by default; this machine's speed drifts by
+up to 20 % from one run to the next), the two alternating.
 
     python benchmarks/exact.py [--poses-subsample 40] [--n-jobs 2] [--broadphase coal]
-                               [--json results.json]
+                               [--repeat 3] [--json results.json]
 
 Needs ``../shared/data`` (relative to the repository); skips with a message when it is absent.
 """
@@ -51,6 +53,9 @@ def main(argv: list[str] | None = None) -> int:
         help="poses timed with the plain loop (default 40)",
     )
     ap.add_argument("--n-jobs", type=int, default=2)
+    ap.add_argument(
+        "--repeat", type=int, default=3, help="runs timed of each loop; the median is reported"
+    )
     ap.add_argument("--broadphase", default="coal", choices=["coal", "fcl", "none"])
     ap.add_argument(
         "--grasps",
@@ -106,19 +111,25 @@ def main(argv: list[str] | None = None) -> int:
         )
         ex.volumes(flat[:2])  # compile / warm caches outside the timing
         build = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        vol = ex.volumes(flat)
-        per_descr = time.perf_counter() - t0
+        exact_runs, plain_runs = [], []
+        for _ in range(max(1, args.repeat)):
+            t0 = time.perf_counter()
+            vol = ex.volumes(flat)
+            exact_runs.append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            ref = plain_volumes(links, bodies, flat[sub])
+            plain_runs.append((time.perf_counter() - t0) / len(sub))
+        per_descr = float(np.median(exact_runs))
+        plain = float(np.median(plain_runs))
         st = ex.stats
-        t0 = time.perf_counter()
-        ref = plain_volumes(links, bodies, flat[sub])
-        plain = (time.perf_counter() - t0) / len(sub)
         diff = np.abs(vol[sub] - ref) / np.maximum(np.abs(ref), 1e-300)
         parts = st["parts"] * st["poses"]
         records.append(
             {
                 "grasp": rel,
                 "seconds_per_descriptor": per_descr,
+                "seconds_per_descriptor_runs": exact_runs,
+                "plain_seconds_per_pose_runs": plain_runs,
                 "build_seconds": build,
                 "plain_seconds_per_pose": plain,
                 "speedup": plain * len(flat) / per_descr,
