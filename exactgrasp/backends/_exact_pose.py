@@ -663,15 +663,26 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
     ptol = 1e-9 * ah
     # A bound on every coordinate (at least 1), for the pre-test's error bound.
     amax = max(1.0, np.abs(AV).max())
+    bmax = 0.0
+    for i in range(nb):
+        bmax = max(bmax, BV0[i, 0] ** 2 + BV0[i, 1] ** 2 + BV0[i, 2] ** 2)
+    bmax = np.sqrt(bmax) * (1.0 + 1e-12)
     nparts = cell_rep.shape[0] - 1
     for ip in range(poses.shape[0]):
         R = poses[ip, :3, :3]
         t = poses[ip, :3, 3]
+        r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
+        r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
+        r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
+        t0, t1, t2 = t[0], t[1], t[2]
         for i in range(nb):
-            for k in range(3):
-                BV[i, k] = R[k, 0] * BV0[i, 0] + R[k, 1] * BV0[i, 1] + R[k, 2] * BV0[i, 2] + t[k]
+            x, y, z = BV0[i, 0], BV0[i, 1], BV0[i, 2]
+            BV[i, 0] = r00 * x + r01 * y + r02 * z + t0
+            BV[i, 1] = r10 * x + r11 * y + r12 * z + t1
+            BV[i, 2] = r20 * x + r21 * y + r22 * z + t2
         face_terms(BV, BF, tiny, BD, BN)
-        gscale = max(amax, np.abs(BV).max())
+        # |R x + t| <= |x| + |t| bounds every moved coordinate.
+        gscale = max(amax, bmax + np.sqrt(t0 * t0 + t1 * t1 + t2 * t2))
         _statuses(BS, BV, agrid)
         # Counters are cleared where the last pose set them; face stamps are unique per pose
         # (ip * mb + s), so neither needs a pass over a whole mesh.
