@@ -399,3 +399,83 @@ def test_surfaces_cross_is_certain_and_keeps_culling_unchanged():
     got = ex.volumes(P)
     assert got[1] == 0.0 and ex.stats["poses_culled"] == 1
     np.testing.assert_array_equal(got, ExactIntersector(links, objs, broadphase=None).volumes(P))
+
+
+def fine_box(lo, hi, subdivisions):
+    """Box mesh with 12 * 4**subdivisions triangles (many hand grid cells hold vertices)."""
+    import trimesh
+
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    m = trimesh.creation.box(extents=hi - lo)
+    m.apply_translation((lo + hi) / 2)
+    for _ in range(subdivisions):
+        m = m.subdivide()
+    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+
+
+def test_cells_classified_whole_match_analytic_overlap():
+    """A finely tessellated hand box: most of its grid cells are never reached by the object's
+    faces and are classified as a whole (inside: their edges' summed weight); the volumes
+    still equal the analytic overlap."""
+    rng = np.random.default_rng(21)
+    hand = fine_box([-1, -1, -1], [1, 1, 1], 4)
+    obj_lo, obj_hi = np.array([-0.3, -2.0, -0.7]), np.array([2.0, 0.6, 1.5])
+    ex = ExactIntersector([hand], [box(obj_lo, obj_hi)], broadphase=None)
+    shifts = np.tile(np.eye(4), (4, 1, 1))
+    shifts[:, :3, 3] = rng.uniform(-0.4, 0.4, (4, 3))
+    got = ex.volumes(shifts)
+    for v, t in zip(got, shifts[:, :3, 3], strict=True):
+        overlap = np.minimum(1.0, obj_hi + t) - np.maximum(-1.0, obj_lo + t)
+        want = np.prod(np.clip(overlap, 0, None))
+        assert abs(v - want) <= 1e-12 * want
+    st = ex.stats
+    assert st["parts_inside"] > st["parts_clipped"] > 0
+    assert st["parts_culled"] > 0 and st["poses_boolean"] == 0
+
+
+def test_hand_parts_tables_are_consistent():
+    """Vertices numbered cell by cell; each part's summed edge weight and the split of every
+    vertex's adjacency (edges to other parts first) as the kernel assumes."""
+    from exactgrasp.backends._exact_geometry import vertex_cells
+
+    hand = fine_box([-1, -1, -1], [1, 1, 1], 3)
+    ex = ExactIntersector([hand], [box([0, 0, 0], [2, 2, 2])], broadphase=None)
+    V, E, adj_start, adj_vert, adj_edge = (ex._A[k] for k in (0, 2, 6, 7, 8))
+    reps, AW, epart, wsum, split = ex._X[4], ex._X[5], ex._X[9], ex._X[10], ex._X[11]
+    cells = vertex_cells(V, ex._agrid[1])
+    assert (np.diff(cells) >= 0).all()
+    part = np.repeat(np.arange(len(reps) - 1), np.diff(reps[:, 1]))
+    assert (cells[reps[:-1, 1]] == reps[:-1, 0]).all() and len(part) == len(V)
+    same = part[E[:, 0]] == part[E[:, 1]]
+    np.testing.assert_array_equal(epart, np.where(same, part[E[:, 0]], -1))
+    np.testing.assert_allclose(wsum, np.bincount(part[E[same, 0]], AW[same], len(reps) - 1))
+    for u in range(len(V)):
+        k = np.arange(adj_start[u], adj_start[u + 1])
+        np.testing.assert_array_equal(epart[adj_edge[k]] == -1, k < split[u])
+        assert set(adj_vert[k]) == set(E[adj_edge[k]].ravel()) - {u}
+
+
+def test_triangle_box_test_against_linear_programme():
+    """`tri_box_xyz` (any half sizes) against an LP: does a point of the triangle lie in the
+    box?"""
+    from exactgrasp.backends._exact_kernels import tri_box_xyz
+
+    rng = np.random.default_rng(8)
+    hits = 0
+    for _ in range(300):
+        T = rng.normal(size=(3, 3))
+        c, h = rng.normal(scale=0.5, size=3), rng.uniform(0.05, 0.8, 3)
+        # Barycentric weights w >= 0, sum 1, with c - h <= T^T w <= c + h.
+        res = linprog(
+            np.zeros(3),
+            A_ub=np.vstack([T.T, -T.T]),
+            b_ub=np.concatenate([c + h, h - c]),
+            A_eq=np.ones((1, 3)),
+            b_eq=[1.0],
+            bounds=[(0, None)] * 3,
+        )
+        want = res.status == 0
+        got = tri_box_xyz(*c, *h, *T.ravel())
+        assert got == want
+        hits += want
+    assert 50 < hits < 250
