@@ -111,8 +111,10 @@ def grid_frame(V: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def vertex_cells(V: np.ndarray, cell: float) -> np.ndarray:
-    """Flat index of the `build_grid` cell holding each vertex of V (n, 3): shape (n,), int64
-    (the same arithmetic as `_exact_kernels.cell_index`)."""
+    """Flat index of the `build_grid` cell holding each vertex of V (n, 3): shape (n,), int64.
+    (`_exact_kernels.cell_index` multiplies by 1 / cell instead, so a vertex within rounding of
+    a cell boundary may get the neighbouring cell there; both cells, grown by the grid's
+    margin, hold it.)"""
     lo, n = grid_frame(V, cell)
     ijk = np.clip(np.floor((V - lo) / cell).astype(np.int64), 0, n - 1)
     return (ijk[:, 0] * n[1] + ijk[:, 1]) * n[2] + ijk[:, 2]

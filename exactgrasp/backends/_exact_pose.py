@@ -200,6 +200,28 @@ def _sgn(x):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _box_meets_face(
+    x0, y0, z0, x1, y1, z1, smin0, smin1, smin2, smax0, smax1, smax2, hx, hy, hz, sd, tol
+):
+    """Whether the box [x0, x1] × [y0, y1] × [z0, z1] may meet an object face: its box
+    (smin*, smax*, already grown by the margin) and its plane (unit normal 2 (hx, hy, hz),
+    offset sd; tolerance tol) are no separating axes. Evaluated in full, without branches (the
+    outcome is hard to predict, see `_object_faces`)."""
+    return (
+        (x0 <= smax0)
+        & (x1 >= smin0)
+        & (y0 <= smax1)
+        & (y1 >= smin1)
+        & (z0 <= smax2)
+        & (z1 >= smin2)
+        & (
+            abs(hx * (x0 + x1) + hy * (y0 + y1) + hz * (z0 + z1) - sd)
+            <= abs(hx) * (x1 - x0) + abs(hy) * (y1 - y0) + abs(hz) * (z1 - z0) + tol
+        )
+    )
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _lone(d0, d1, d2):
     """Index of the vertex alone on its side of a plane (signed distances d*, none zero,
     not all of one sign): the two edges from it are the ones that cross the plane."""
@@ -289,7 +311,6 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
         inv = 1.0 / nrm if nrm > 0 else 0.0
         nx, ny, nz = BN[s, 0] * inv, BN[s, 1] * inv, BN[s, 2] * inv
         hx, hy, hz = 0.5 * nx, 0.5 * ny, 0.5 * nz
-        ax, ay, az = abs(hx), abs(hy), abs(hz)
         sd = nx * sa0 + ny * sa1 + nz * sa2
         # Walk the columns along the normal's dominant axis d and visit only the cells the face's
         # plane passes through (with a margin); the separating-axis test then decides.
@@ -338,19 +359,13 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                     pa1 = PT[c, 0] * sb0 + PT[c, 1] * sb1 + PT[c, 2] * sb2
                     pa2 = PT[c, 0] * sc0 + PT[c, 1] * sc1 + PT[c, 2] * sc2
                     ok = (
-                        (x0 <= smax0)
-                        & (x1 >= smin0)
-                        & (y0 <= smax1)
-                        & (y1 >= smin1)
-                        & (z0 <= smax2)
-                        & (z1 >= smin2)
+                        _box_meets_face(
+                            x0, y0, z0, x1, y1, z1, smin0, smin1, smin2, smax0, smax1, smax2,
+                            hx, hy, hz, sd, margin,
+                        )
                         & (min(pa0, pa1, pa2) <= PT[c, 4])
                         & (max(pa0, pa1, pa2) >= PT[c, 3])
-                        & (
-                            abs(hx * (x0 + x1) + hy * (y0 + y1) + hz * (z0 + z1) - sd)
-                            <= ax * (x1 - x0) + ay * (y1 - y0) + az * (z1 - z0) + margin
-                        )
-                    )
+                    )  # fmt: skip
                     if not ok:
                         continue
                     if not tri_box_xyz(
@@ -368,18 +383,10 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                     for q in range(acs[c], acs[c + 1]):
                         x0, y0, z0 = CBB[q, 0], CBB[q, 1], CBB[q, 2]
                         x1, y1, z1 = CBB[q, 3], CBB[q, 4], CBB[q, 5]
-                        ok = (
-                            (x0 <= smax0)
-                            & (x1 >= smin0)
-                            & (y0 <= smax1)
-                            & (y1 >= smin1)
-                            & (z0 <= smax2)
-                            & (z1 >= smin2)
-                            & (
-                                abs(hx * (x0 + x1) + hy * (y0 + y1) + hz * (z0 + z1) - sd)
-                                <= ax * (x1 - x0) + ay * (y1 - y0) + az * (z1 - z0) + 2.0 * ptol
-                            )
-                        )
+                        ok = _box_meets_face(
+                            x0, y0, z0, x1, y1, z1, smin0, smin1, smin2, smax0, smax1, smax2,
+                            hx, hy, hz, sd, 2.0 * ptol,
+                        )  # fmt: skip
                         buf[m] = q
                         m += 1 if ok else 0
                     for j in range(m):

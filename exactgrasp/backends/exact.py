@@ -350,15 +350,20 @@ class ExactIntersector:
         lo, h, n = self._agrid[0], self._agrid[1], self._agrid[2]
         return lo + np.stack(np.unravel_index(np.arange(np.prod(n)), tuple(n)), axis=1) * h
 
+    def _clip_to_cells(self, boxes: np.ndarray, corner: np.ndarray) -> None:
+        """Clip boxes (k, 6: min xyz, max xyz) in place to the hand grid cells whose lower
+        corners are ``corner`` (k, 3), grown by the kernel's margin (1e-9 of a cell)."""
+        h = self._agrid[1]
+        boxes[:, :3] = np.maximum(boxes[:, :3], corner - 1e-9 * h)
+        boxes[:, 3:] = np.minimum(boxes[:, 3:], corner + h + 1e-9 * h)
+
     def _cell_boxes(self, ABB: np.ndarray) -> np.ndarray:
         """The hand faces' bounding boxes (m, 6) in the order of the grid's cell lists, each
         clipped to its cell grown by the kernel's margin: shape (listed, 6)."""
-        h, cs, ct = self._agrid[1], self._agrid[4], self._agrid[5]
-        corner = np.repeat(self._cell_corners(), np.diff(cs), axis=0)
-        out = ABB[ct]
-        out[:, :3] = np.maximum(out[:, :3], corner - 1e-9 * h)
-        out[:, 3:] = np.minimum(out[:, 3:], corner + h + 1e-9 * h)
-        return np.ascontiguousarray(out)
+        cs, ct = self._agrid[4], self._agrid[5]
+        out = np.ascontiguousarray(ABB[ct])
+        self._clip_to_cells(out, np.repeat(self._cell_corners(), np.diff(cs), axis=0))
+        return out
 
     def _cell_patches(self, AV, AF, AN, ABB) -> np.ndarray:
         """Per hand grid cell, bounds of the faces it lists, shape (cells, 11): a unit axis (the
@@ -388,9 +393,7 @@ class ExactIntersector:
             np.maximum.at(out[:, 8 + k], cell, ABB[ct, 3 + k])
         # Clipped to the cell (grown by the kernel's margin): the part of the faces that the
         # cell holds lies in this box, which the search tests each object face against.
-        corner = self._cell_corners()
-        out[:, 5:8] = np.maximum(out[:, 5:8], corner - 1e-9 * h)
-        out[:, 8:] = np.minimum(out[:, 8:], corner + h + 1e-9 * h)
+        self._clip_to_cells(out[:, 5:], self._cell_corners())
         return out
 
     def _contained(self, pose: np.ndarray) -> float:
