@@ -121,6 +121,30 @@ def invert_rigid(transform: np.ndarray) -> np.ndarray:
     return out
 
 
+def rigid_defects(transforms: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """How far each 4x4 matrix is from a proper rigid transform.
+
+    Parameters
+    ----------
+    transforms : numpy.ndarray, shape (..., 4, 4)
+
+    Returns
+    -------
+    orthonormality : numpy.ndarray, shape (...)
+        ``max |R^T R - I|`` of the rotation part R.
+    determinant : numpy.ndarray, shape (...)
+        ``det R`` (+1 for a rotation, -1 for a reflection).
+    last_row : numpy.ndarray, shape (...)
+        ``max |row 3 - (0, 0, 0, 1)|``.
+    """
+    transforms = np.asarray(transforms, dtype=np.float64)
+    rot = transforms[..., :3, :3]
+    gram = np.einsum("...ki,...kj->...ij", rot, rot)
+    orthonormality = np.abs(gram - np.eye(3)).max(axis=(-2, -1))
+    last_row = np.abs(transforms[..., 3, :] - np.array([0.0, 0.0, 0.0, 1.0])).max(axis=-1)
+    return orthonormality, np.linalg.det(rot), last_row
+
+
 def is_rigid(transform: np.ndarray, atol: float = 1e-6) -> bool:
     """Whether a 4x4 matrix is a proper rigid transform (rotation with det +1, last row 0 0 0 1).
 
@@ -137,9 +161,5 @@ def is_rigid(transform: np.ndarray, atol: float = 1e-6) -> bool:
     transform = np.asarray(transform, dtype=np.float64)
     if transform.shape != (4, 4) or not np.all(np.isfinite(transform)):
         return False
-    rot = transform[:3, :3]
-    return bool(
-        np.allclose(rot.T @ rot, np.eye(3), atol=atol)
-        and abs(np.linalg.det(rot) - 1.0) <= atol
-        and np.allclose(transform[3], [0.0, 0.0, 0.0, 1.0], atol=atol)
-    )
+    orthonormality, determinant, last_row = rigid_defects(transform)
+    return bool(orthonormality <= atol and abs(determinant - 1.0) <= atol and last_row <= atol)

@@ -11,30 +11,90 @@ if TYPE_CHECKING:
     from exactgrasp.grasp import Grasp
 
 
-def check_poses(poses: np.ndarray) -> np.ndarray:
+#: Tolerance of the rigid-motion check of `check_poses`: ``R^T R = I``, ``det R = 1`` and the
+#: last row ``0 0 0 1`` must hold to this; products of sampled rotations stay within 1e-14.
+RIGID_ATOL = 1e-9
+
+
+def check_poses(poses: np.ndarray, name: str = "poses") -> np.ndarray:
     """Validate an array of rigid poses.
 
     Parameters
     ----------
     poses : array_like, shape (..., 4, 4)
-        Homogeneous rigid transforms acting on the object in the canonical frame.
+        Homogeneous rigid transforms acting on the object in the canonical frame: rotation
+        part orthonormal with determinant +1 and last row ``0 0 0 1``, each to `RIGID_ATOL`.
+    name : str
+        What the caller calls the argument, for messages.
 
     Returns
     -------
     numpy.ndarray, shape (..., 4, 4), float64
         The same poses as a C-contiguous float64 array.
+
+    Raises
+    ------
+    BackendError
+        For a wrong shape, a non-finite entry, or a pose that is not a rigid motion (a
+        reflection, a scale, a shear, a projective last row); the message names the first
+        such pose by its index.
     """
     from exactgrasp.errors import BackendError
+    from exactgrasp.se3 import rigid_defects
 
     arr = np.ascontiguousarray(poses, dtype=np.float64)
     if arr.ndim < 2 or arr.shape[-2:] != (4, 4):
         raise BackendError(
-            f"poses must have shape (..., 4, 4), got {arr.shape}; "
+            f"{name} must have shape (..., 4, 4), got {arr.shape}; "
             "pass PathSampler.poses() or a stack of 4x4 homogeneous matrices."
         )
-    if not np.all(np.isfinite(arr)):
-        raise BackendError("poses contain NaN or infinite entries; pass finite 4x4 matrices.")
+    finite = np.isfinite(arr).all(axis=(-2, -1))
+    if not finite.all():
+        raise BackendError(
+            f"{_label(name, _first(~finite))} contains NaN or infinite entries; pass finite 4x4 "
+            "matrices."
+        )
+    orthonormality, determinant, last_row = rigid_defects(arr)
+    checks = (
+        (
+            last_row > RIGID_ATOL,
+            lambda i: f"its last row is {arr[i][3].tolist()}, not [0, 0, 0, 1]",
+        ),
+        (
+            determinant < 0,
+            lambda i: f"its rotation part has determinant {determinant[i]:.6g} (a reflection)",
+        ),
+        (
+            orthonormality > RIGID_ATOL,
+            lambda i: (
+                "its rotation part is not orthonormal (max |R^T R - I| = "
+                f"{orthonormality[i]:.3g}: a scale or a shear)"
+            ),
+        ),
+        (
+            np.abs(determinant - 1.0) > RIGID_ATOL,
+            lambda i: f"its rotation part has determinant {determinant[i]:.6g}, not 1",
+        ),
+    )
+    for bad, what in checks:
+        if bad.any():
+            index = _first(bad)
+            raise BackendError(
+                f"{_label(name, index)} is not a rigid motion: {what(index)}. Backends move the "
+                f"object rigidly; pass rotations (det +1, orthonormal to {RIGID_ATOL:g}) with a "
+                "translation and last row 0 0 0 1, and scale meshes with units=..., not poses."
+            )
     return arr
+
+
+def _first(mask: np.ndarray) -> tuple[int, ...]:
+    """Index of the first True entry of `mask` (as a tuple, for messages and indexing)."""
+    return tuple(int(i) for i in np.unravel_index(int(np.argmax(mask)), mask.shape))
+
+
+def _label(name: str, index: tuple[int, ...]) -> str:
+    """``poses[3]`` for pose 3 of a stack, ``poses`` for a single pose."""
+    return f"{name}[{', '.join(map(str, index))}]" if index else name
 
 
 class Backend(abc.ABC):

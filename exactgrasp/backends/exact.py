@@ -33,7 +33,7 @@ from exactgrasp.backends._exact_geometry import (
     union,
     vertex_cells,
 )
-from exactgrasp.backends._exact_kernels import face_terms, point_status, winding_number
+from exactgrasp.backends._exact_kernels import face_terms, winding_number
 from exactgrasp.backends.base import Backend, check_poses
 from exactgrasp.errors import BackendError, require
 
@@ -73,6 +73,71 @@ def agrees(a: np.ndarray, b: np.ndarray, hand_volume: float, rtol: float = RTOL)
     """
     a, b = np.asarray(a, float), np.asarray(b, float)
     return np.abs(a - b) <= rtol * np.maximum(np.abs(b), FLOOR * hand_volume)
+
+
+#: Largest grid a cell option may ask for (cells per grid): about 1.6 GB of tables.
+MAX_GRID_CELLS = 200_000_000
+
+
+def _check_options(broadphase: Any, n_jobs: Any, tuning: dict[str, Any]) -> dict[str, Any]:
+    """Validate the exact backend's options; returns the tuning options as plain numbers.
+
+    Raises `BackendError` naming the option and what is allowed.
+    """
+    if broadphase not in BROADPHASES:
+        raise BackendError(f"unknown broadphase {broadphase!r}; use one of 'coal', 'fcl' or None.")
+    if isinstance(n_jobs, bool) or not (
+        n_jobs == -1 or (isinstance(n_jobs, int | np.integer) and n_jobs >= 1)
+    ):
+        raise BackendError(f"n_jobs must be a positive integer or -1, got {n_jobs!r}.")
+    unknown = set(tuning) - {"hand_cell", "object_cell", "capacity"}
+    if unknown:
+        raise BackendError(
+            f"unknown tuning options {sorted(unknown)}; use hand_cell, object_cell or capacity."
+        )
+    out: dict[str, Any] = {}
+    for key in ("hand_cell", "object_cell"):
+        value = tuning.get(key)
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(
+            value, int | float | np.integer | np.floating
+        ):
+            raise BackendError(
+                f"{key} must be a positive length (same units as the meshes) or None for the "
+                f"default (1/48 of the mesh's extent), got {value!r}."
+            )
+        if not (np.isfinite(value) and value > 0):
+            raise BackendError(
+                f"{key} must be a positive, finite length (same units as the meshes) or None "
+                f"for the default (1/48 of the mesh's extent), got {value!r}."
+            )
+        out[key] = float(value)
+    if "capacity" in tuning:
+        value = tuning["capacity"]
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+            raise BackendError(
+                f"capacity must be a positive integer (edge crossings recorded per pose before "
+                f"the pose falls back to a boolean; default 400000), got {value!r}."
+            )
+        out["capacity"] = int(value)
+    return out
+
+
+def _grid_cell(vertices: np.ndarray, cell: float | None, key: str) -> float:
+    """The grid cell edge for a mesh: ``cell`` if given (checked against `MAX_GRID_CELLS`),
+    else 1/48 of the mesh's largest extent."""
+    extent = np.ptp(vertices, axis=0)
+    if cell is None:
+        return float(extent.max() / 48)
+    cells = float(np.prod(np.ceil(extent / cell) + 3))
+    if cells > MAX_GRID_CELLS:
+        raise BackendError(
+            f"{key}={cell:g} lays {cells:.3g} grid cells over a mesh of extent "
+            f"{extent.max():.4g}, more than {MAX_GRID_CELLS:,}; use a {key} of at least "
+            f"{extent.max() / (MAX_GRID_CELLS ** (1 / 3) - 3):.3g}, or None for the default."
+        )
+    return float(cell)
 
 
 def _solids(meshes: list[Mesh], what: str) -> list:
@@ -185,6 +250,39 @@ class _PoseCull:
             )
 
 
+def _shells_outside(
+    X: np.ndarray, shells: tuple[np.ndarray, int], grid: tuple, V: np.ndarray, F: np.ndarray
+) -> bool:
+    """Whether every shell of a mesh lies outside another closed mesh, their surfaces apart.
+
+    Parameters
+    ----------
+    X : numpy.ndarray, shape (n, 3)
+        The mesh's vertices in the other mesh's frame.
+    shells : (numpy.ndarray (n,) int64, int)
+        Shell of each vertex and the number of shells (`_vertex_components`).
+    grid : tuple
+        The other mesh's cell grid (`build_grid`).
+    V, F : numpy.ndarray
+        The other mesh, for a winding number where no vertex of a shell has a known status.
+    """
+    lo, h, n, status = grid[:4]
+    ijk = np.floor((X - lo) * (1.0 / h)).astype(np.int64)
+    off = np.any((ijk < 0) | (ijk >= n), axis=1)
+    i, j, k = np.clip(ijk, 0, n - 1).T
+    st = np.where(off, 0, status[(i * n[1] + j) * n[2] + k])
+    label, count = shells
+    if np.any(st == 1):
+        return False
+    known = np.zeros(count, bool)
+    known[label[st == 0]] = True
+    for shell in np.flatnonzero(~known):
+        x = np.ascontiguousarray(X[np.argmax(label == shell)])
+        if round(winding_number(x, V, F)) & 1:
+            return False
+    return True
+
+
 class ExactIntersector:
     """Exact volumes of a fixed hand ∩ a rigidly moved object.
 
@@ -223,19 +321,8 @@ class ExactIntersector:
         n_jobs: int = 1,
         **tuning: Any,
     ):
-        if broadphase not in BROADPHASES:
-            raise BackendError(
-                f"unknown broadphase {broadphase!r}; use one of 'coal', 'fcl' or None."
-            )
-        unknown = set(tuning) - {"hand_cell", "object_cell", "capacity"}
-        if unknown:
-            raise BackendError(
-                f"unknown tuning options {sorted(unknown)}; use hand_cell, "
-                "object_cell or capacity."
-            )
+        tuning = _check_options(broadphase, n_jobs, tuning)
         self.n_jobs = (os.cpu_count() or 1) if n_jobs == -1 else int(n_jobs)
-        if self.n_jobs < 1:
-            raise BackendError(f"n_jobs must be a positive integer or -1, got {n_jobs!r}.")
         self.hand_solid = union(_solids(hand_links, "hand link"))
         self.object_solid = union(_solids(object_bodies, "object body"))
         self.hand_volume = float(self.hand_solid.volume())
@@ -244,8 +331,8 @@ class ExactIntersector:
         BV, BF = mesh_arrays(self.object_solid)
         # Cells scale with each mesh (units-free); 1/48 of the extent measured best on the
         # Barrett hand (0.1 canonical units).
-        hand_cell = tuning.get("hand_cell") or np.ptp(AV, axis=0).max() / 48
-        object_cell = tuning.get("object_cell") or np.ptp(BV, axis=0).max() / 48
+        hand_cell = _grid_cell(AV, tuning.get("hand_cell"), "hand_cell")
+        object_cell = _grid_cell(BV, tuning.get("object_cell"), "object_cell")
         # The hand's vertices numbered cell by cell: each "part" (grid cell holding vertices)
         # is then a range of vertices that the kernel can classify as a whole.
         AV, AF = cell_order(AV, AF, float(hand_cell))
@@ -396,21 +483,18 @@ class ExactIntersector:
         self._clip_to_cells(out[:, 5:], self._cell_corners())
         return out
 
-    def _contained(self, pose: np.ndarray) -> float:
-        """Volume for a pose whose surfaces are apart: 0, the object's or the hand's."""
-        AV, AF = self._A[0], self._A[1]
-        BV, BF = self._B[0], self._B[1]
-        b0 = pose[:3, :3] @ BV[0] + pose[:3, 3]
-        s = point_status(b0, *self._agrid[:4])
-        if s < 0:
-            s = round(winding_number(b0, AV, AF)) & 1
-        if s == 1:
-            return self.object_volume
-        a0 = pose[:3, :3].T @ (AV[0] - pose[:3, 3])
-        s = point_status(a0, *self._bgrid[:4])
-        if s < 0:
-            s = round(winding_number(a0, BV, BF)) & 1
-        return self.hand_volume if s == 1 else 0.0
+    def _shells_outside(self, pose: np.ndarray) -> bool:
+        """For a pose whose surfaces are apart: whether every shell of each mesh lies outside
+        the other (the volume is then 0, whatever the shells' nesting).
+
+        Surfaces apart, each shell lies wholly inside or wholly outside the other mesh, so one
+        vertex of known status decides it; a shell with none gets a winding number."""
+        R, t = pose[:3, :3], pose[:3, 3]
+        moved_object = self._B[0] @ R.T + t
+        hand_in_object = (self._A[0] - t) @ R
+        return _shells_outside(
+            moved_object, self._shells[1], self._agrid, self._A[0], self._A[1]
+        ) and _shells_outside(hand_in_object, self._shells[0], self._bgrid, self._B[0], self._B[1])
 
     def _chunk(self, poses: np.ndarray):
         n = len(poses)
@@ -425,10 +509,11 @@ class ExactIntersector:
                 poses, self._A[0], *self._shells[0], self._agrid, self._B[0], *self._shells[1],
                 self._bgrid,
             )  # fmt: skip
+            # Only poses whose volume is exactly 0 are culled: a shell inside the other mesh is
+            # left to the kernel, so culling cannot change a single bit of any result.
             for i in np.flatnonzero(~crossing):
                 p = poses[i]
-                if self._cull.far(p):
-                    out[i] = self._contained(p)
+                if self._cull.far(p) and self._shells_outside(p):
                     codes[i] = kp.CULLED
                     todo[i] = False
         idx = np.flatnonzero(todo)
@@ -573,22 +658,11 @@ class ExactBackend(Backend):
     cache_size = 4
 
     def __init__(self, broadphase: str | None = "coal", n_jobs: int = 1, **tuning: Any):
-        if broadphase not in BROADPHASES:
-            raise BackendError(
-                f"unknown broadphase {broadphase!r}; use one of 'coal', 'fcl' or None."
-            )
+        tuning = _check_options(broadphase, n_jobs, tuning)
         if broadphase == "coal":
             require("coal", "the exact backend's coal broad phase", "coal", "exact")
         elif broadphase == "fcl":
             require("fcl", "the exact backend's fcl broad phase", "python-fcl", "exact")
-        if not (n_jobs == -1 or (isinstance(n_jobs, int | np.integer) and n_jobs >= 1)):
-            raise BackendError(f"n_jobs must be a positive integer or -1, got {n_jobs!r}.")
-        unknown = set(tuning) - {"hand_cell", "object_cell", "capacity"}
-        if unknown:
-            raise BackendError(
-                f"unknown tuning options {sorted(unknown)}; use hand_cell, "
-                "object_cell or capacity."
-            )
         self.broadphase = broadphase
         self.n_jobs = int(n_jobs)
         self.tuning = dict(tuning)
