@@ -120,7 +120,10 @@ class Hand:
         units: str = "m",
         repair: bool = False,
     ) -> Hand:
-        """A rigid hand from one mesh file (all of its closed shells are links).
+        """A rigid hand from one mesh file: one link, the solid its closed shells bound.
+
+        Overlapping shells are merged into one solid with a warning and a shell crossing
+        itself is refused (see `exactgrasp.shells.resolve_shells`).
 
         Parameters
         ----------
@@ -154,7 +157,9 @@ class Hand:
         Parameters
         ----------
         meshes : sequence
-            Closed link meshes in hand coordinates; they may overlap.
+            Closed link meshes in hand coordinates; links may overlap each other, and a link
+            of several overlapping shells is merged into the solid they bound (with a
+            warning; see `exactgrasp.solid.Solid`).
         frame : HandFrame
             Required.
         names : sequence of str, optional

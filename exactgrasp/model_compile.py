@@ -24,7 +24,8 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from exactgrasp import primitives
-from exactgrasp.errors import ModelError, require
+from exactgrasp.errors import MeshError, ModelError, require
+from exactgrasp.shells import resolve_shells
 
 if TYPE_CHECKING:
     from exactgrasp.models import KinematicModel
@@ -93,7 +94,9 @@ class PalmSpec:
 
 
 def _weld(V: np.ndarray, F: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
-    """Merge duplicate vertices, drop collapsed faces, check the shell is closed.
+    """Merge duplicate vertices, drop collapsed faces, check the mesh is closed, and resolve
+    its shells (`exactgrasp.shells.resolve_shells`: overlapping shells merged with a warning,
+    a self-crossing shell refused with a `ModelError`).
 
     MuJoCo keeps vertices split where normals differ and stores them in float32, so a closed
     mesh file comes out of a compiled model open: copies of one vertex are identical or a
@@ -123,6 +126,12 @@ def _weld(V: np.ndarray, F: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarr
             "duplicate vertices; repair the mesh file (e.g. trimesh.repair or pymeshfix) "
             "or use a primitive geom instead"
         )
+    try:
+        # Once per mesh asset, at compile time: posing moves links rigidly, so a resolved
+        # link stays resolved in every joint configuration.
+        V, F, _ = resolve_shells(V, F, what, orientation="flip", warn=_warn)
+    except MeshError as exc:
+        raise ModelError(str(exc)) from None
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     if np.einsum("ij,ij->", a, np.cross(b, c)) < 0:
         _warn(f"{what} is inside-out (negative volume); its faces were flipped")

@@ -18,6 +18,7 @@ import numpy as np
 import trimesh
 
 from exactgrasp.errors import MeshError
+from exactgrasp.shells import resolve_shells
 
 #: Length of one unit in metres.
 UNITS: dict[str, float] = {
@@ -106,6 +107,10 @@ def load_points(source: Any, units: str = "m", name: str = "surface_samples") ->
 class Solid:
     """A closed, consistently oriented triangle mesh of positive volume, in metres.
 
+    A mesh of several closed shells is read as the solid they bound: disjoint bodies and
+    cavities are kept, overlapping or redundant shells are merged with a warning, a shell
+    that crosses itself is refused (see `exactgrasp.shells` and ``docs/solids.md``).
+
     Parameters
     ----------
     vertices : array_like, shape (n, 3)
@@ -120,8 +125,8 @@ class Solid:
         Fix what trimesh and pymeshfix can (merge vertices, fix winding, fill holes) and warn
         with the volume before and after. A mesh still not closed afterwards is refused.
     orientation : {"flip", "refuse"}
-        What to do with an inside-out mesh (negative volume): flip it with a warning, or
-        refuse it.
+        What to do with an inside-out mesh (negative volume), or with an inside-out shell
+        that lies inside no other shell: flip it with a warning, or refuse it.
     surface_samples : path or array_like, shape (k, 3), optional
         Points on the surface (e.g. the authors' ``*_P.ply``) in ``units``; used by the voxel
         estimator instead of its own sampling.
@@ -136,6 +141,15 @@ class Solid:
     surface_samples : numpy.ndarray, shape (k, 3), metres, or None
     repair_report : dict or None
         ``{"volume_before", "volume_after", "actions"}`` when ``repair`` changed the mesh.
+    shell_report : dict or None
+        How the mesh's closed shells relate and what was done about it (see
+        `exactgrasp.shells.resolve_shells`): ``n_shells``, per-shell ``shells`` (vertex and
+        face counts, signed volume, role: outer, cavity, island, merged, redundant,
+        flipped), ``crossing_pairs``, ``touching_pairs``, ``actions`` (empty when the mesh
+        was kept as is), ``volume_before``, ``volume_after`` (m^3). Overlapping shells are
+        merged into the solid they bound (points of winding number >= 1), with a warning;
+        a shell crossing itself is refused. A rigid copy (`transformed`) keeps its
+        original's report.
     """
 
     def __init__(
@@ -166,6 +180,13 @@ class Solid:
         if repair:
             mesh = self._repair(mesh)
         self._check_closed(mesh)
+        # Before the orientation check: one inside-out shell among several is not an
+        # inside-out mesh, and overlapping shells make the signed volume meaningless.
+        V, F, self.shell_report = resolve_shells(
+            mesh.vertices, mesh.faces, self.name, orientation=orientation
+        )
+        if V is not mesh.vertices:
+            mesh = trimesh.Trimesh(V, F, process=False)
         mesh = self._check_orientation(mesh, orientation)
         if check_scale:
             self._check_size(mesh, units)
@@ -228,6 +249,7 @@ class Solid:
         solid.faces.flags.writeable = False
         solid.surface_samples = samples
         solid.repair_report = None
+        solid.shell_report = None
         solid.source = None
         return solid
 
@@ -422,7 +444,9 @@ class Solid:
         samples = self.surface_samples
         if samples is not None:
             samples = samples @ matrix[:3, :3].T + matrix[:3, 3]
-        return Solid._trusted(vertices, self.faces, name or self.name, samples)
+        moved = Solid._trusted(vertices, self.faces, name or self.name, samples)
+        moved.shell_report = getattr(self, "shell_report", None)
+        return moved
 
     def __repr__(self) -> str:
         return (

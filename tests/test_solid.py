@@ -102,7 +102,11 @@ def test_foodclip_is_open_and_repairs_to_two_halves(shared_data):
     # the shared data's own closing (4 planar caps, two halves): 99,902 mm^3
     assert solid.volume == pytest.approx(99_902e-9, rel=1e-3)
     report = solid.repair_report
-    assert report["volume_after"] == solid.volume
+    # The two halves touch face to face: merged into the solid they bound, same volume.
+    assert report["volume_after"] == pytest.approx(solid.volume, rel=1e-12)
+    assert solid.shell_report["n_shells"] == 2
+    assert solid.shell_report["crossing_pairs"] == 0
+    assert [s["role"] for s in solid.shell_report["shells"]] == ["merged", "merged"]
     assert report["volume_before"] == pytest.approx(1.0005e-4, rel=1e-3)
     assert any("volume" in str(w.message) and "->" in str(w.message) for w in caught)
     assert len(solid.to_trimesh().split()) == 2
