@@ -187,3 +187,118 @@ def build_grid(V: np.ndarray, F: np.ndarray, cell: float) -> tuple:
     table = np.zeros(tuple(n + 1), np.int64)
     table[1:, 1:, 1:] = surface.reshape(tuple(n)).cumsum(0).cumsum(1).cumsum(2)
     return (lo, float(cell), n, status, cell_start, tris, table.reshape(-1))
+
+
+def face_conditioning(V: np.ndarray, F: np.ndarray, N: np.ndarray) -> tuple:
+    """Per face, ``|b - a| |c - a|`` and the conditioning ``kappa = |b - a| |c - a| / |N|``
+    (infinite where the computed normal N is zero): the direction error of a unit normal
+    from a cross product is about ``7 U kappa`` (see `_exact_kernels.PLANE_ERR`).
+
+    Parameters
+    ----------
+    V, F : numpy.ndarray
+        The mesh, shapes (n, 3) and (m, 3).
+    N : numpy.ndarray, shape (m, 3)
+        The faces' computed (unnormalised) normals ``(b - a) × (c - a)``.
+
+    Returns
+    -------
+    (l1l2 (m,), kappa (m,)) : tuple of numpy.ndarray
+    """
+    a = V[F[:, 0]]
+    l1l2 = np.linalg.norm(V[F[:, 1]] - a, axis=1) * np.linalg.norm(V[F[:, 2]] - a, axis=1)
+    norm = np.linalg.norm(N, axis=1)
+    kappa = np.divide(l1l2, norm, out=np.full(len(F), np.inf), where=norm > 0)
+    return l1l2, kappa
+
+
+def face_d_coefs(l1l2: np.ndarray, kappa: np.ndarray) -> np.ndarray:
+    """`_exact_kernels.face_d_coef` for every face: what a face's rounded ``D`` can cost its
+    terms, divided by the coordinate bound; shape (m,)."""
+    from exactgrasp.backends._exact_kernels import FACE_D_ERR, FACE_D_ERR_NONE, KAPPA_MAX, U
+
+    return np.where(kappa <= KAPPA_MAX, FACE_D_ERR, FACE_D_ERR_NONE) * U * l1l2
+
+
+def hand_tables(V: np.ndarray, F: np.ndarray, E: np.ndarray, ET: np.ndarray, tiny: float):
+    """The hand's per-face and per-edge terms, with error bounds (see `_exact_pose`).
+
+    ``D_t`` and the edge weights ``W_e`` are computed in extended precision (``longdouble``;
+    80-bit on x86-64) once, so the fixed hand's weights carry almost no rounding.
+
+    Parameters
+    ----------
+    V, F : numpy.ndarray
+        The hand mesh in local coordinates, shapes (n, 3) and (m, 3).
+    E, ET : numpy.ndarray
+        Its edges and their faces (`prepare_mesh`).
+    tiny : float
+        Faces with ``|N|² <= tiny`` get ``D = 0`` (as `_exact_kernels.face_terms`).
+
+    Returns
+    -------
+    AD : (m, 3) ``D_t`` rounded to double.
+    AN : (m, 3) the normals ``(b - a) × (c - a)`` in double (as the kernels compute them).
+    AP : (m, 6) unit normal, plane offset, `_exact_kernels.plane_err_coef` of the face's
+        conditioning, and what its rounded ``D`` can cost (absolute, `face_d_coef` times the
+        hand's coordinate bound).
+    AW : (e, 2) ``W_e`` and a bound on its error (rounding to double, the extended-precision
+        evaluation, a third of each face's ``D`` cost).
+    WL : (e,) ``W_e`` in extended precision (for the parts' sums).
+    """
+    from exactgrasp.backends._exact_kernels import (
+        KAPPA_MAX,
+        PLANE_ERR,
+        PLANE_ERR_NONE,
+        TERM_ERR,
+        U,
+        face_terms,
+    )
+
+    m = len(F)
+    AD = np.zeros((m, 3))
+    AN = np.zeros((m, 3))
+    face_terms(V, F, tiny, AD, AN)
+    L = V.astype(np.longdouble)
+    a = L[F[:, 0]]
+    NL = np.cross(L[F[:, 1]] - a, L[F[:, 2]] - a)
+    nn = np.einsum("ij,ij->i", NL, NL)
+    good = nn > tiny
+    s = np.zeros(m, np.longdouble)
+    s[good] = np.einsum("ij,ij->i", NL[good], a[good]) / nn[good]
+    DL = s[:, None] * NL
+    AD = np.ascontiguousarray(DL.astype(np.float64))
+    norm = np.linalg.norm(AN, axis=1)
+    unit = np.divide(AN, norm[:, None], out=np.zeros_like(AN), where=norm[:, None] > 0)
+    l1l2, kappa = face_conditioning(V, F, AN)
+    coef = np.where(kappa <= KAPPA_MAX, PLANE_ERR * U * (1.0 + kappa), PLANE_ERR_NONE)
+    g = max(float(np.sqrt((V**2).sum(1)).max()) * (1.0 + 1e-12), 1e-300)
+    dcost = face_d_coefs(l1l2, kappa) * g
+    AP = np.ascontiguousarray(
+        np.column_stack([unit, np.einsum("ij,ij->i", unit, V[F[:, 0]]), coef, dcost])
+    )
+    WL = np.einsum("ij,ij->i", DL[ET[:, 0]] - DL[ET[:, 1]], np.cross(L[E[:, 0]], L[E[:, 1]])) / 6
+    W = WL.astype(np.float64)
+    uL = float(np.finfo(np.longdouble).eps) / 2
+    dn = np.abs(AD[ET[:, 0]]).sum(1) + np.abs(AD[ET[:, 1]]).sum(1)
+    uv = np.abs(V[E[:, 0]]).max(1) * np.abs(V[E[:, 1]]).max(1)
+    err = U * np.abs(W) + TERM_ERR * uL * dn * uv + (dcost[ET[:, 0]] + dcost[ET[:, 1]]) / 3
+    return AD, AN, AP, np.ascontiguousarray(np.column_stack([W, err])), WL
+
+
+def part_sums(epart: np.ndarray, AW: np.ndarray, WL: np.ndarray, nparts: int) -> np.ndarray:
+    """Per hand part, the summed weight of its own edges (extended precision, rounded once)
+    and a bound on its error: shape (parts, 2). ``epart`` is each edge's part (-1 between
+    parts), ``AW`` and ``WL`` as from `hand_tables`."""
+    from exactgrasp.backends._exact_kernels import U
+
+    own = epart >= 0
+    total = np.zeros(nparts, np.longdouble)
+    np.add.at(total, epart[own], WL[own])
+    absw = np.bincount(epart[own], weights=np.abs(AW[own, 0]), minlength=nparts)
+    count = np.bincount(epart[own], minlength=nparts)
+    uL = float(np.finfo(np.longdouble).eps) / 2
+    wsum = total.astype(np.float64)
+    err = np.bincount(epart[own], weights=AW[own, 1], minlength=nparts).astype(np.float64)
+    err += U * np.abs(wsum) + 2.0 * count * uL * absw
+    return np.ascontiguousarray(np.column_stack([wsum, err]))

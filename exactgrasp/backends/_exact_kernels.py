@@ -31,6 +31,42 @@ from numba import njit
 # coordinate difference is at most L: 4.7e-15 L^3, taken with a margin of two.
 _ORIENT_ERR = 1e-14
 
+#: Unit roundoff of double precision (round to nearest): every error bound below is a multiple.
+U = 2.0**-53
+#: A plane distance ``n·x - n·a`` with the unit normal of a face from its cross product errs by
+#: at most ``U G (25 + 14.2 kappa)`` (``G`` bounds every coordinate, ``kappa`` the face's
+#: conditioning `face_conditioning`; see docs/exact-backend.md): taken as ``32 (1 + kappa)``.
+PLANE_ERR = 32.0
+#: Conditioning beyond which the normal's direction error (7 U kappa, first order) is not
+#: trusted: the face's plane tests then certify nothing and every decision takes the exact test.
+KAPPA_MAX = 1e-2 / (7.0 * U)
+#: Plane-distance error coefficient (times G) of a face beyond `KAPPA_MAX`: a distance that
+#: large is impossible, so no side, box or walk decision is taken in floating point.
+PLANE_ERR_NONE = 4.0
+#: Error of a face's ``D = (n·a) n`` against the exact one, times its area / 3 (what the face's
+#: terms can lose, see docs), in units of ``U G |b - a| |c - a|``: at most 6 when conditioned
+#: (taken as 8), 236 beyond `KAPPA_MAX` (taken as 240).
+FACE_D_ERR, FACE_D_ERR_NONE = 8.0, 240.0
+#: Rounding of one product term ``g · (p × q) / 6`` (and of an edge weight), in units of
+#: ``U (|D_1|_1 + |D_2|_1) |p|_inf |q|_inf``: 3 by a first-order count, taken as 4.
+TERM_ERR = 4.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def plane_err_coef(kappa):
+    """Bound on the error of a plane distance with a face's unit normal, divided by the
+    coordinate bound G (`PLANE_ERR`); `PLANE_ERR_NONE` beyond `KAPPA_MAX` (or no normal)."""
+    if kappa <= KAPPA_MAX:
+        return PLANE_ERR * U * (1.0 + kappa)
+    return PLANE_ERR_NONE
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def face_d_coef(kappa, l1l2):
+    """Bound (divided by G) on what a face's rounded ``D`` costs its terms: ``|dD| area / 3``
+    (`FACE_D_ERR`), from the face's conditioning and ``|b - a| |c - a|``."""
+    return (FACE_D_ERR if kappa <= KAPPA_MAX else FACE_D_ERR_NONE) * U * l1l2
+
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def orient_bound(extent):
@@ -112,6 +148,26 @@ def face_terms(V, F, tiny, D, N):
             D[f, 0] = s * n0
             D[f, 1] = s * n1
             D[f, 2] = s * n2
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def edge_weight_err(V, D, E, ET, e, Dcoef, g):
+    """``W_e`` (see `edge_weight`) and a bound on its error: its rounding (`TERM_ERR`) and
+    a third of what each face's rounded ``D`` costs (``Dcoef[t] * g``, see `face_d_coef`)."""
+    i, j = E[e, 0], E[e, 1]
+    t1 = ET[e, 0]
+    t2 = ET[e, 1]
+    cx = V[i, 1] * V[j, 2] - V[i, 2] * V[j, 1]
+    cy = V[i, 2] * V[j, 0] - V[i, 0] * V[j, 2]
+    cz = V[i, 0] * V[j, 1] - V[i, 1] * V[j, 0]
+    w = (
+        (D[t1, 0] - D[t2, 0]) * cx + (D[t1, 1] - D[t2, 1]) * cy + (D[t1, 2] - D[t2, 2]) * cz
+    ) / 6.0
+    dn = abs(D[t1, 0]) + abs(D[t1, 1]) + abs(D[t1, 2]) + abs(D[t2, 0]) + abs(D[t2, 1])
+    dn += abs(D[t2, 2])
+    ui = max(abs(V[i, 0]), abs(V[i, 1]), abs(V[i, 2]))
+    vj = max(abs(V[j, 0]), abs(V[j, 1]), abs(V[j, 2]))
+    return w, TERM_ERR * U * dn * ui * vj + (Dcoef[t1] + Dcoef[t2]) * g / 3.0
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -18,19 +18,35 @@ import numpy as np
 from numba import njit
 
 from exactgrasp.backends._exact_kernels import (
+    U,
     cell_index,
-    edge_weight,
+    edge_weight_err,
     face_terms,
+    plane_err_coef,
     point_status,
     ray_status,
     surface_cells_in,
     tri_box_xyz,
     tri_cell_range,
 )
-from exactgrasp.backends._exact_pairs import pair, segment_term
+from exactgrasp.backends._exact_pairs import (
+    crossing_starts,
+    pair,
+    param_err,
+    point_err,
+    segment_term,
+)
 
 #: Object faces are first tested in runs of this many consecutive faces (see `_near_chunks`).
 CHUNK = 16
+#: Rounding of the projections on the common line, in units of U |direction|_1 G: each
+#: projection errs by 3.1, the interpolation by twice that; taken as 16.
+LINE_ROUNDING = 16.0
+#: The common-line comparisons' own rounding (relative, far below this).
+LINE_SLACK = 1.0 + 1e-6
+#: A pose's volume is certified zero within its error bound times this (the bound's own
+#: rounding, relative, is far below it).
+BOUND_SLACK = 1.0 + 1e-6
 #: Per-pose result codes.
 OK, CULLED, DEGENERATE, OVERFLOW = 0, 1, 2, 3
 #: Columns of the per-pose statistics array.
@@ -94,27 +110,35 @@ def _resolve(S, adj_start, adj_vert, adj_edge, cnt, queue, reps, uniform):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _edge_sum(
-    V, D, E, ET, S, cnt, Wpre, adj_start, adj_vert, adj_edge, adj_split, reps, uniform, wsum
-):
+    V, D, E, ET, S, cnt, Wpre, adj_start, adj_vert, adj_edge, adj_split, reps, uniform, wsum,
+    Dcoef, g,
+):  # fmt: skip
     """Σ_e W_e over the edges of one mesh that nothing crosses and whose ends are inside;
-    returns (sum, consistent). ``Wpre`` holds precomputed weights (fixed mesh) or is empty
-    (weights computed here).
+    returns (sum, error bound, consistent). ``Wpre`` (e, 2) holds precomputed weights and
+    their error bounds (fixed mesh) or is empty (weights computed here, with `edge_weight_err`
+    from ``Dcoef`` and the coordinate bound ``g``). The bound adds the rounding of the sum,
+    ``U Σ |partial sums|``.
 
     Consistency: an edge nothing crosses must have ends of one status. Only the edges at
     inside vertices are visited (an edge between two outside vertices adds nothing and is
     consistent), which checks every uncrossed edge. A part classified whole (``uniform``,
-    see `_hand_statuses`) that is inside adds its own edges' summed weight ``wsum`` (they are
-    uncrossed and consistent) and visits only its vertices' edges to other parts, which come
-    first in each vertex's adjacency, up to ``adj_split[u]``.
+    see `_hand_statuses`) that is inside adds its own edges' summed weight ``wsum[p, 0]``
+    (error bound ``wsum[p, 1]``; they are uncrossed and consistent) and visits only its
+    vertices' edges to other parts, which come first in each vertex's adjacency, up to
+    ``adj_split[u]``.
     """
     have = Wpre.shape[0] > 0
     total = 0.0
+    err = 0.0
+    run = 0.0
     for p in range(reps.shape[0] - 1):
         whole = uniform[p]
         if whole:
             if S[reps[p, 1]] != 1:
                 continue
-            total += wsum[p]
+            total += wsum[p, 0]
+            err += wsum[p, 1]
+            run += abs(total)
         for u in range(reps[p, 1], reps[p + 1, 1]):
             if S[u] != 1:
                 continue
@@ -124,18 +148,36 @@ def _edge_sum(
                     continue
                 w = adj_vert[k]
                 if S[w] != 1:
-                    return 0.0, False
+                    return 0.0, 0.0, False
                 if u < w:
-                    total += Wpre[e] if have else edge_weight(V, D, E, ET, e)
-    return total, True
+                    if have:
+                        total += Wpre[e, 0]
+                        err += Wpre[e, 1]
+                    else:
+                        we, ee = edge_weight_err(V, D, E, ET, e, Dcoef, g)
+                        total += we
+                        err += ee
+                    run += abs(total)
+    return total, err + U * run, True
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _weight(V, D, E, ET, e, Wpre, have, Dcoef, g):
+    if have:
+        return Wpre[e, 0], Wpre[e, 1]
+    return edge_weight_err(V, D, E, ET, e, Dcoef, g)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _crossed_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, multi, epart, uniform):
+def _crossed_sum(
+    V, D, E, ET, S, cnt, rec_e, rec_l, rec_d, nrec, Wpre, multi, epart, uniform, Dcoef, g
+):  # fmt: skip
     """Σ_e W_e f_e over the crossed edges of one mesh, f_e the share of edge e inside the
     other mesh (from the recorded crossing parameters ``rec_l`` of edges ``rec_e``, ``cnt[e]``
-    of them per edge); returns (sum, consistent): the end statuses of each edge must differ by
-    the parity of its crossings. ``Wpre`` holds precomputed weights (fixed mesh) or is empty.
+    of them per edge, each erring by up to ``rec_d``); returns (sum, error bound, consistent):
+    the end statuses of each edge must differ by the parity of its crossings. ``Wpre``,
+    ``Dcoef`` and ``g`` as in `_edge_sum`; the bound holds ``|W_e|`` times the parameters'
+    errors, the weights' errors and the sum's rounding.
     An edge crossed once needs no sorting; the records of the others are gathered in
     ``multi`` (scratch, at least ``nrec`` long) and sorted by edge. With parts (``epart`` not
     empty, see `_edge_sum`), an edge of a part classified whole must not be crossed (it never
@@ -143,22 +185,27 @@ def _crossed_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, multi, epart, un
     have = Wpre.shape[0] > 0
     parts = epart.shape[0] > 0
     total = 0.0
+    err = 0.0
+    run = 0.0
     nm = 0
     for i in range(nrec):
         e = rec_e[i]
         if parts and epart[e] >= 0 and uniform[epart[e]]:
-            return 0.0, False
+            return 0.0, 0.0, False
         if cnt[e] != 1:
             multi[nm] = i
             nm += 1
             continue
         s0 = S[E[e, 0]]
         if S[E[e, 1]] == s0:
-            return 0.0, False
+            return 0.0, 0.0, False
         frac = rec_l[i] if s0 == 1 else 1.0 - rec_l[i]
-        total += frac * (Wpre[e] if have else edge_weight(V, D, E, ET, e))
+        we, ee = _weight(V, D, E, ET, e, Wpre, have, Dcoef, g)
+        total += frac * we
+        err += ee + abs(we) * rec_d[i]
+        run += abs(total)
     if nm == 0:
-        return total, True
+        return total, err + 3.0 * U * run, True
     key = np.empty(nm, np.int64)
     for i in range(nm):
         key[i] = rec_e[multi[i]]
@@ -168,9 +215,11 @@ def _crossed_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, multi, epart, un
     while i < nm:
         e = key[order[i]]
         j = i
+        dl = 0.0
         while j < nm and key[order[j]] == e:
             # Insertion sort: an edge rarely crosses the other surface more than twice.
             x = rec_l[multi[order[j]]]
+            dl += rec_d[multi[order[j]]]
             m = j - i
             while m > 0 and lam[m - 1] > x:
                 lam[m] = lam[m - 1]
@@ -178,7 +227,7 @@ def _crossed_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, multi, epart, un
             lam[m] = x
             j += 1
         if S[E[e, 1]] != S[E[e, 0]] ^ ((j - i) & 1):
-            return 0.0, False
+            return 0.0, 0.0, False
         inside = S[E[e, 0]] == 1
         frac = 0.0
         last = 0.0
@@ -189,9 +238,14 @@ def _crossed_sum(V, D, E, ET, S, cnt, rec_e, rec_l, nrec, Wpre, multi, epart, un
             inside = not inside
         if inside:
             frac += 1.0 - last
-        total += frac * (Wpre[e] if have else edge_weight(V, D, E, ET, e))
+        we, ee = _weight(V, D, E, ET, e, Wpre, have, Dcoef, g)
+        total += frac * we
+        # Sorting is 1-Lipschitz in each parameter: the alternating sum errs by at most
+        # (crossings) times the largest parameter error.
+        err += ee + abs(we) * (dl + 4.0 * U) * (j - i)
+        run += abs(total)
         i = j
-    return total, True
+    return total, err + 3.0 * U * run, True
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
@@ -233,12 +287,13 @@ def _lone(d0, d1, d2):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _on_line(x0, x1, x2, d0, d1, d2, k, ext):
-    """Where a triangle's two crossing edges meet a plane, projected on the direction of that
-    plane's line with another plane: (a, b, error bound), a on the edge from the lone vertex
-    k to corner k + 1 (face corner k's edge), b on the edge from k to corner k + 2 (corner
-    k + 2's edge). x* are the vertices' projections on that direction, d* their signed
-    distances to the plane, all farther than the tolerance."""
+def _on_line(x0, x1, x2, d0, d1, d2, k, span, err, rho):
+    """Where a triangle's two crossing edges meet a plane, projected on a direction (that of
+    the plane's line with another plane, as computed): (a, b, error bound), a on the edge from
+    the lone vertex k to corner k + 1 (face corner k's edge), b on the edge from k to corner
+    k + 2 (corner k + 2's edge). x* are the vertices' projections on that direction, d* their
+    signed distances to the plane, all farther than twice their error bound ``err``; ``span``
+    bounds every projected difference of the corners, ``rho`` the projections' rounding."""
     if k == 0:
         xk, xi, xj, dk, di, dj = x0, x1, x2, d0, d1, d2
     elif k == 1:
@@ -249,9 +304,9 @@ def _on_line(x0, x1, x2, d0, d1, d2, k, ext):
     rj = 1.0 / (abs(dk) + abs(dj))
     a = xk + (xi - xk) * (abs(dk) * ri)
     b = xk + (xj - xk) * (abs(dk) * rj)
-    # The crossing parameters err by about (error of the distances) / (ai or aj), which moves
-    # the points by up to ext times that; 1e-11 is far above double rounding here.
-    return a, b, 1e-11 * (1.0 + ext * max(ri, rj))
+    # The exact point's projection is xk + lam* (xi - xk) with |lam - lam*| <= 4 err ri
+    # (`param_err`), so a errs by span times that, plus the rounding of the projections.
+    return a, b, span * (4.0 * err * max(ri, rj) + 4.0 * U) + rho
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
@@ -270,23 +325,33 @@ def _crossing(u, v, du, dv):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, near):
+def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, near, Bdc, gb):
     """All terms of the object's faces against the hand: finds the hand faces each may cross
-    through the hand's cell grid and evaluates each pair. Returns (segment sum, crossings,
-    pairs tried, code); stops at the first degenerate pair or overflow.
+    through the hand's cell grid and evaluates each pair. Returns (segment sum, its error
+    bound, crossings, pairs tried, code); stops at the first degenerate pair or overflow.
+
+    Every floating-point decision has a tolerance at least twice its error bound: a plane
+    test of a face with the face's own bound (`plane_err_coef` of its conditioning, times the
+    coordinate bound ``gscale``; hand faces' coefficients in ``AP[:, 4]``), at least ``ptol``;
+    the box and walk filters likewise. ``Bdc`` (object faces) and ``AP[:, 5]`` (hand faces,
+    absolute) are what each face's rounded ``D`` costs its terms (`face_d_coef`), ``gb`` the
+    object's coordinate bound.
 
     The loop over faces lives here, not in the caller, so that the tuples are unpacked once
     per pose: unpacking them per face cost more than the whole search."""
     AV, AF, ATE, ATO = A[0], A[1], A[4], A[5]
     BTE, BTO = B[4], B[5]
-    AD, AN, CBB, AP, nxt, PT = X[0], X[1], X[6], X[3], X[7], X[8]
+    AD, CBB, AP, nxt, PT = X[0], X[6], X[3], X[7], X[8]
     alo, ah, an, acs, act, atable = agrid[0], agrid[1], agrid[2], agrid[4], agrid[5], agrid[6]
     iah = 1.0 / ah
     acnt, bcnt, arec, brec, nrec, stamp, P, sg, dt, rng, cellmark, buf = W
-    arec_e, arec_l, brec_e, brec_l = arec[0], arec[1], brec[0], brec[1]
+    arec_e, arec_l, arec_d = arec[0], arec[1], arec[2]
+    brec_e, brec_l, brec_d = brec[0], brec[1], brec[2]
     cap = arec_e.shape[0]
     BF = B[1]
     seg = 0.0
+    segerr = 0.0
+    run = 0.0
     ncross = 0
     npairs = 0
     for s in range(BF.shape[0]):
@@ -309,6 +374,12 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
         smin2 = min(sa2, sb2, sc2) - margin
         nrm = np.sqrt(BN[s, 0] ** 2 + BN[s, 1] ** 2 + BN[s, 2] ** 2)
         inv = 1.0 / nrm if nrm > 0 else 0.0
+        # The face's conditioning |b - a| |c - a| / |N| widens its tolerances (slivers).
+        l1 = (sb0 - sa0) ** 2 + (sb1 - sa1) ** 2 + (sb2 - sa2) ** 2
+        l2 = (sc0 - sa0) ** 2 + (sc1 - sa1) ** 2 + (sc2 - sa2) ** 2
+        eps_s = plane_err_coef(np.sqrt(l1 * l2) * inv if nrm > 0 else np.inf) * gscale
+        tol_e = max(ptol, 2.0 * eps_s)
+        beta_s = Bdc[s] * gb
         nx, ny, nz = BN[s, 0] * inv, BN[s, 1] * inv, BN[s, 2] * inv
         hx, hy, hz = 0.5 * nx, 0.5 * ny, 0.5 * nz
         sd = nx * sa0 + ny * sa1 + nz * sa2
@@ -331,7 +402,7 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
         # spans its value at the centre plus or minus `spread`.
         inv_nd = 1.0 / nd if nrm > 0 else 0.0
         spread = (abs(na_) + abs(nb_)) * abs(inv_nd) * (0.5 * ah + margin)
-        slack = 1e-6 * ah
+        slack = max(1e-6 * ah, 4.0 * eps_s)
         for ia in range(rng[a, 0], rng[a, 1] + 1):
             za = sd - na_ * (alo[a] + (ia + 0.5) * ah)
             for ib in range(rng[b, 0], rng[b, 1] + 1):
@@ -361,7 +432,7 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                     ok = (
                         _box_meets_face(
                             x0, y0, z0, x1, y1, z1, smin0, smin1, smin2, smax0, smax1, smax2,
-                            hx, hy, hz, sd, margin,
+                            hx, hy, hz, sd, max(margin, 2.0 * eps_s),
                         )
                         & (min(pa0, pa1, pa2) <= PT[c, 4])
                         & (max(pa0, pa1, pa2) >= PT[c, 3])
@@ -385,7 +456,7 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                         x1, y1, z1 = CBB[q, 3], CBB[q, 4], CBB[q, 5]
                         ok = _box_meets_face(
                             x0, y0, z0, x1, y1, z1, smin0, smin1, smin2, smax0, smax1, smax2,
-                            hx, hy, hz, sd, 2.0 * ptol,
+                            hx, hy, hz, sd, max(2.0 * ptol, 2.0 * eps_s),
                         )  # fmt: skip
                         buf[m] = q
                         m += 1 if ok else 0
@@ -401,15 +472,17 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                         e0 = AV[v0, 0] * nx + AV[v0, 1] * ny + AV[v0, 2] * nz - sd
                         e1 = AV[v1, 0] * nx + AV[v1, 1] * ny + AV[v1, 2] * nz - sd
                         e2 = AV[v2, 0] * nx + AV[v2, 1] * ny + AV[v2, 2] * nz - sd
-                        if ((e0 > ptol) & (e1 > ptol) & (e2 > ptol)) | (
-                            (e0 < -ptol) & (e1 < -ptol) & (e2 < -ptol)
+                        if ((e0 > tol_e) & (e1 > tol_e) & (e2 > tol_e)) | (
+                            (e0 < -tol_e) & (e1 < -tol_e) & (e2 < -tol_e)
                         ):
                             continue
                         f0 = sa0 * AP[ft, 0] + sa1 * AP[ft, 1] + sa2 * AP[ft, 2] - AP[ft, 3]
                         f1 = sb0 * AP[ft, 0] + sb1 * AP[ft, 1] + sb2 * AP[ft, 2] - AP[ft, 3]
                         f2 = sc0 * AP[ft, 0] + sc1 * AP[ft, 1] + sc2 * AP[ft, 2] - AP[ft, 3]
-                        if ((f0 > ptol) & (f1 > ptol) & (f2 > ptol)) | (
-                            (f0 < -ptol) & (f1 < -ptol) & (f2 < -ptol)
+                        eps_t = AP[ft, 4] * gscale
+                        tol_f = max(ptol, 2.0 * eps_t)
+                        if ((f0 > tol_f) & (f1 > tol_f) & (f2 > tol_f)) | (
+                            (f0 < -tol_f) & (f1 < -tol_f) & (f2 < -tol_f)
                         ):
                             continue
                         # Both planes straddled and every vertex clear of the other plane:
@@ -418,7 +491,9 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                         # both ends of the other. Anything closer goes to the exact `pair`.
                         # Scalars only in here: passing arrays to a function that is not
                         # inlined costs atomic reference counts on every call.
-                        sided = min(abs(e0), abs(e1), abs(e2), abs(f0), abs(f1), abs(f2)) > ptol
+                        sided = (min(abs(e0), abs(e1), abs(e2)) > tol_e) & (
+                            min(abs(f0), abs(f1), abs(f2)) > tol_f
+                        )
                         if sided:
                             ux, uy, uz = AP[ft, 0], AP[ft, 1], AP[ft, 2]
                             Dx = uy * nz - uz * ny
@@ -433,23 +508,28 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                                 max(smax1, t0y, t1y, t2y) - min(smin1, t0y, t1y, t2y),
                                 max(smax2, t0z, t1z, t2z) - min(smin2, t0z, t1z, t2z),
                             )
+                            # Any direction serves: the four points lie on the common line,
+                            # so their order along it is their order here (or reversed).
+                            dnorm = abs(Dx) + abs(Dy) + abs(Dz)
+                            span = ext * dnorm
+                            rho = LINE_ROUNDING * U * dnorm * gscale
                             kt = _lone(e0, e1, e2)
                             at, bt, errt = _on_line(
                                 Dx * t0x + Dy * t0y + Dz * t0z,
                                 Dx * t1x + Dy * t1y + Dz * t1z,
                                 Dx * t2x + Dy * t2y + Dz * t2z,
-                                e0, e1, e2, kt, ext,
+                                e0, e1, e2, kt, span, eps_s, rho,
                             )  # fmt: skip
                             ks = _lone(f0, f1, f2)
                             as_, bs, errs = _on_line(
                                 Dx * sa0 + Dy * sa1 + Dz * sa2,
                                 Dx * sb0 + Dy * sb1 + Dz * sb2,
                                 Dx * sc0 + Dy * sc1 + Dz * sc2,
-                                f0, f1, f2, ks, ext,
+                                f0, f1, f2, ks, span, eps_t, rho,
                             )  # fmt: skip
                             lot, hit = min(at, bt), max(at, bt)
                             los, his = min(as_, bs), max(as_, bs)
-                            tol = (errt + errs) * gscale
+                            tol = (errt + errs) * LINE_SLACK
                             if max(los - hit, lot - his) > tol:
                                 continue
                             npairs += 1
@@ -460,26 +540,32 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                                 # helper taking the meshes' arrays, even inlined, cost 36,000
                                 # reference-count updates a pose and 2-4 % of the time.
                                 npt = 0
+                                nstart = 0
                                 px = py = pz = qx = qy = qz = 0.0
+                                ep = eq = 0.0
                                 for w in range(4):
                                     if w < 2:
                                         if not (los < (at if w == 0 else bt) < his):
                                             continue
                                         k0 = kt if w == 0 else (kt + 2) % 3
                                         k1 = (k0 + 1) % 3
-                                        u, v, lam = _crossing(
-                                            AF[ft, k0], AF[ft, k1], _pick(e0, e1, e2, k0),
-                                            _pick(e0, e1, e2, k1),
-                                        )  # fmt: skip
-                                        cx_ = AV[u, 0] + lam * (AV[v, 0] - AV[u, 0])
-                                        cy_ = AV[u, 1] + lam * (AV[v, 1] - AV[u, 1])
-                                        cz_ = AV[u, 2] + lam * (AV[v, 2] - AV[u, 2])
+                                        d_0, d_1 = _pick(e0, e1, e2, k0), _pick(e0, e1, e2, k1)
+                                        u, v, lam = _crossing(AF[ft, k0], AF[ft, k1], d_0, d_1)
+                                        dl = param_err(d_0, d_1, eps_s)
+                                        first = crossing_starts(0, d_0, d_1)
+                                        dx_ = AV[v, 0] - AV[u, 0]
+                                        dy_ = AV[v, 1] - AV[u, 1]
+                                        dz_ = AV[v, 2] - AV[u, 2]
+                                        cx_ = AV[u, 0] + lam * dx_
+                                        cy_ = AV[u, 1] + lam * dy_
+                                        cz_ = AV[u, 2] + lam * dz_
                                         if ATO[ft, k0]:
                                             if nrec[0] >= cap:
-                                                return seg, ncross, npairs, OVERFLOW
+                                                return seg, segerr, ncross, npairs, OVERFLOW
                                             ed = ATE[ft, k0]
                                             arec_e[nrec[0]] = ed
                                             arec_l[nrec[0]] = lam
+                                            arec_d[nrec[0]] = dl
                                             nrec[0] += 1
                                             acnt[ed] += 1
                                     else:
@@ -487,50 +573,63 @@ def _object_faces(A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, stamp0, n
                                             continue
                                         k0 = ks if w == 2 else (ks + 2) % 3
                                         k1 = (k0 + 1) % 3
-                                        u, v, lam = _crossing(
-                                            BF[s, k0], BF[s, k1], _pick(f0, f1, f2, k0),
-                                            _pick(f0, f1, f2, k1),
-                                        )  # fmt: skip
-                                        cx_ = BV[u, 0] + lam * (BV[v, 0] - BV[u, 0])
-                                        cy_ = BV[u, 1] + lam * (BV[v, 1] - BV[u, 1])
-                                        cz_ = BV[u, 2] + lam * (BV[v, 2] - BV[u, 2])
+                                        d_0, d_1 = _pick(f0, f1, f2, k0), _pick(f0, f1, f2, k1)
+                                        u, v, lam = _crossing(BF[s, k0], BF[s, k1], d_0, d_1)
+                                        dl = param_err(d_0, d_1, eps_t)
+                                        first = crossing_starts(1, d_0, d_1)
+                                        dx_ = BV[v, 0] - BV[u, 0]
+                                        dy_ = BV[v, 1] - BV[u, 1]
+                                        dz_ = BV[v, 2] - BV[u, 2]
+                                        cx_ = BV[u, 0] + lam * dx_
+                                        cy_ = BV[u, 1] + lam * dy_
+                                        cz_ = BV[u, 2] + lam * dz_
                                         if BTO[s, k0]:
                                             if nrec[1] >= cap:
-                                                return seg, ncross, npairs, OVERFLOW
+                                                return seg, segerr, ncross, npairs, OVERFLOW
                                             ed = BTE[s, k0]
                                             brec_e[nrec[1]] = ed
                                             brec_l[nrec[1]] = lam
+                                            brec_d[nrec[1]] = dl
                                             nrec[1] += 1
                                             bcnt[ed] += 1
-                                    if npt == 0:
-                                        px, py, pz = cx_, cy_, cz_
+                                    perr = point_err(dl, max(abs(dx_), abs(dy_), abs(dz_)), gscale)
+                                    # The segment runs from its start to its end along n_t x n_s.
+                                    if first:
+                                        px, py, pz, ep = cx_, cy_, cz_, perr
+                                        nstart += 1
                                     else:
-                                        qx, qy, qz = cx_, cy_, cz_
+                                        qx, qy, qz, eq = cx_, cy_, cz_, perr
                                     npt += 1
-                                if npt != 2:
-                                    return seg, ncross, npairs, DEGENERATE
-                                seg += segment_term(
-                                    px, py, pz, qx, qy, qz, AN[ft, 0], AN[ft, 1], AN[ft, 2],
-                                    BN[s, 0], BN[s, 1], BN[s, 2], AD[ft, 0] - BD[s, 0],
-                                    AD[ft, 1] - BD[s, 1], AD[ft, 2] - BD[s, 2],
+                                if npt != 2 or nstart != 1:
+                                    return seg, segerr, ncross, npairs, DEGENERATE
+                                term, terr = segment_term(
+                                    px, py, pz, qx, qy, qz, ep, eq, AD[ft, 0], AD[ft, 1],
+                                    AD[ft, 2], BD[s, 0], BD[s, 1], BD[s, 2],
                                 )  # fmt: skip
+                                seg += term
+                                run += abs(seg)
+                                segerr += terr + AP[ft, 5] + beta_s
                                 ncross += 1
                                 continue
                             sg[0, 0], sg[0, 1], sg[0, 2] = _sgn(e0), _sgn(e1), _sgn(e2)
                             sg[1, 0], sg[1, 1], sg[1, 2] = _sgn(f0), _sgn(f1), _sgn(f2)
-                            dt[0, 0], dt[0, 1], dt[0, 2] = e0, e1, e2
-                            dt[1, 0], dt[1, 1], dt[1, 2] = f0, f1, f2
+                            dt[0, 0], dt[0, 1], dt[0, 2], dt[0, 3] = e0, e1, e2, eps_s
+                            dt[1, 0], dt[1, 1], dt[1, 2], dt[1, 3] = f0, f1, f2, eps_t
                         else:
                             npairs += 1
-                        term, pc = pair(
-                            ft, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, AN, BD, BN,
-                            acnt, bcnt, arec_e, arec_l, brec_e, brec_l, nrec, P, sg, dt, sided,
+                        term, terr, pc = pair(
+                            ft, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, BD, acnt, bcnt,
+                            arec, brec, nrec, P, sg, dt, sided, gscale,
                         )  # fmt: skip
                         if pc >= 2:
-                            return seg, ncross, npairs, (DEGENERATE if pc == 2 else OVERFLOW)
-                        seg += term
-                        ncross += pc
-    return seg, ncross, npairs, OK
+                            code = DEGENERATE if pc == 2 else OVERFLOW
+                            return seg, segerr, ncross, npairs, code
+                        if pc == 1:
+                            seg += term
+                            run += abs(seg)
+                            segerr += terr + AP[ft, 5] + beta_s
+                            ncross += 1
+    return seg, segerr + U * run, ncross, npairs, OK
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -606,13 +705,20 @@ def _hand_statuses(S, V, R, t, grid, reps, cellmark, whole, uniform):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, stats):
+def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, bdc, tiny, cap, out, codes, stats):
     """Volume of A ∩ (pose · B) for each pose; A (the hand) is fixed, B is in its own frame.
 
     ``X = (AD, AN, ABB, AP, reps, AW, CBB, nxt, PT, epart, wsum, split)`` holds per-face
     data of A (`face_terms`, bounding boxes, unit plane), its parts (grid cells holding
     vertices, see `ExactIntersector._cell_reps`), A's edge weights, the search's tables
     (`_object_faces`) and A's edges by part (`ExactIntersector._part_edges`).
+    ``bdc`` holds per face of B what its rounded ``D`` may cost (`face_d_coef`, over the
+    coordinate bound).
+
+    Each volume comes with an error bound (terms' rounding, crossing points' errors, the
+    faces' rounded ``D`` and the sums' rounding; see docs/exact-backend.md). A volume within
+    it of zero is exactly 0; one below minus it is inconsistent and reported DEGENERATE, so no
+    negative volume is returned.
     ``codes[i]`` is OK, DEGENERATE or OVERFLOW (the caller recomputes those with a boolean);
     ``stats[i]`` counts pairs tried, crossing pairs, and A's surface cells touched /
     untouched inside / untouched outside.
@@ -638,8 +744,8 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
     noparts = np.empty(0, np.int64)
     acnt = np.zeros(AE.shape[0], np.int64)
     bcnt = np.zeros(BE.shape[0], np.int64)
-    arec = (np.empty(cap, np.int64), np.empty(cap))
-    brec = (np.empty(cap, np.int64), np.empty(cap))
+    arec = (np.empty(cap, np.int64), np.empty(cap), np.empty(cap))
+    brec = (np.empty(cap, np.int64), np.empty(cap), np.empty(cap))
     nrec = np.zeros(2, np.int64)
     multi = np.empty(cap, np.int64)
     stamp = np.full(AF.shape[0], -1, np.int64)
@@ -657,19 +763,25 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
         brec,
         nrec,
         stamp,
-        np.empty((2, 3)),
+        np.empty((2, 5)),
         np.empty((2, 3), np.int64),
-        np.empty((2, 3)),
+        np.empty((2, 4)),
         np.empty((3, 2), np.int64),
         cellmark,
         np.empty(max(1, np.max(acs[1:] - acs[:-1])), np.int64),
     )
-    noW = np.empty(0)
+    noW = np.empty((0, 2))
+    noDc = np.empty(0)
     margin = 1e-9 * ah
     # Plane distances below this may be sign-uncertain in floating point; far above rounding.
     ptol = 1e-9 * ah
-    # A bound on every coordinate (at least 1), for the pre-test's error bound.
-    amax = max(1.0, np.abs(AV).max())
+    # Bounds on every vertex's length (hand; object in its frame): the error bounds'
+    # coordinate scale. The coordinates are local (about the hand's centre), so it measures
+    # the geometry's size, not its position.
+    amax = 0.0
+    for i in range(na):
+        amax = max(amax, AV[i, 0] ** 2 + AV[i, 1] ** 2 + AV[i, 2] ** 2)
+    amax = max(np.sqrt(amax) * (1.0 + 1e-12), 1e-300)
     bmax = 0.0
     for i in range(nb):
         bmax = max(bmax, BV0[i, 0] ** 2 + BV0[i, 1] ** 2 + BV0[i, 2] ** 2)
@@ -689,7 +801,8 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
             BV[i, 2] = r20 * x + r21 * y + r22 * z + t2
         face_terms(BV, BF, tiny, BD, BN)
         # |R x + t| <= |x| + |t| bounds every moved coordinate.
-        gscale = max(amax, bmax + np.sqrt(t0 * t0 + t1 * t1 + t2 * t2))
+        gb = bmax + np.sqrt(t0 * t0 + t1 * t1 + t2 * t2) * (1.0 + 1e-12)
+        gscale = max(amax, gb)
         _statuses(BS, BV, agrid)
         # Counters are cleared where the last pose set them; face stamps are unique per pose
         # (ip * mb + s), so neither needs a pass over a whole mesh.
@@ -700,8 +813,8 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
         nrec[:] = 0
         cellmark[:] = False
         _near_chunks(bchunks, R, t, agrid, margin, W[9], near)
-        seg, ncross, npairs, code = _object_faces(
-            A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, ip * mb, near
+        seg, segerr, ncross, npairs, code = _object_faces(
+            A, X, agrid, B, BV, BD, BN, W, margin, ptol, gscale, ip * mb, near, bdc, gb
         )
         # After the search: the cells it marked tell which parts are classified whole.
         _hand_statuses(AS, AV, R, t, bgrid, cell_rep, cellmark, code == OK, uniform)
@@ -736,24 +849,34 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, tiny, cap, out, codes, s
                     _spread(BS, B[6], B[7], B[8], bcnt, queue, 1)
                     u = _next_unknown(BS, u + 1, breps, bwhole)
         if code == OK:
-            sa_, oka = _edge_sum(
+            sa_, ea, oka = _edge_sum(
                 AV, AD, AE, AET, AS, acnt, X[5], A[6], A[7], A[8], X[11], cell_rep, uniform,
-                X[10],
+                X[10], noDc, gscale,
             )  # fmt: skip
-            sa2, oka2 = _crossed_sum(
-                AV, AD, AE, AET, AS, acnt, arec[0], arec[1], nrec[0], X[5], multi, epart,
-                uniform,
+            sa2, ea2, oka2 = _crossed_sum(
+                AV, AD, AE, AET, AS, acnt, arec[0], arec[1], arec[2], nrec[0], X[5], multi,
+                epart, uniform, noDc, gscale,
             )  # fmt: skip
-            sb_, okb = _edge_sum(
-                BV, BD, BE, BET, BS, bcnt, noW, B[6], B[7], B[8], bsplit, breps, bwhole, noW
-            )
-            sb2, okb2 = _crossed_sum(
-                BV, BD, BE, BET, BS, bcnt, brec[0], brec[1], nrec[1], noW, multi, noparts,
-                bwhole,
+            sb_, eb, okb = _edge_sum(
+                BV, BD, BE, BET, BS, bcnt, noW, B[6], B[7], B[8], bsplit, breps, bwhole, noW,
+                bdc, gb,
+            )  # fmt: skip
+            sb2, eb2, okb2 = _crossed_sum(
+                BV, BD, BE, BET, BS, bcnt, brec[0], brec[1], brec[2], nrec[1], noW, multi,
+                noparts, bwhole, bdc, gb,
             )  # fmt: skip
             if not (oka and oka2 and okb and okb2):
                 code = DEGENERATE
-            out[ip] = sa_ + sa2 + sb_ + sb2 + seg
+            vol = sa_ + sa2 + sb_ + sb2 + seg
+            # The four additions round by at most 4 U times the largest partial sum.
+            bound = ea + ea2 + eb + eb2 + segerr
+            bound += 4.0 * U * (abs(sa_) + abs(sa2) + abs(sb_) + abs(sb2) + abs(seg))
+            bound *= BOUND_SLACK
+            if abs(vol) <= bound:
+                vol = 0.0
+            elif vol < 0.0 and code == OK:
+                code = DEGENERATE
+            out[ip] = vol
         codes[ip] = code
         stats[ip, STAT_PAIRS] = npairs
         stats[ip, STAT_CROSSING] = ncross

@@ -27,13 +27,17 @@ from exactgrasp.backends import _exact_pose as kp
 from exactgrasp.backends._exact_geometry import (
     build_grid,
     cell_order,
+    face_conditioning,
+    face_d_coefs,
+    hand_tables,
     mesh_arrays,
+    part_sums,
     prepare_mesh,
     to_manifold,
     union,
     vertex_cells,
 )
-from exactgrasp.backends._exact_kernels import face_terms, winding_number
+from exactgrasp.backends._exact_kernels import winding_number
 from exactgrasp.backends.base import Backend, check_poses
 from exactgrasp.errors import BackendError, require
 
@@ -138,6 +142,20 @@ def _grid_cell(vertices: np.ndarray, cell: float | None, key: str) -> float:
             f"{extent.max() / (MAX_GRID_CELLS ** (1 / 3) - 3):.3g}, or None for the default."
         )
     return float(cell)
+
+
+def _bounds_centre(meshes: list[Mesh]) -> np.ndarray:
+    """Centre of the bounding box of all vertices of the meshes, shape (3,)."""
+    if not meshes:
+        raise BackendError("no hand link meshes given; pass at least one (V, F) pair.")
+    lo = np.min([np.min(V, axis=0) for V, _ in meshes], axis=0)
+    hi = np.max([np.max(V, axis=0) for V, _ in meshes], axis=0)
+    return 0.5 * (lo + hi)
+
+
+def _shifted(meshes: list[Mesh], origin: np.ndarray) -> list[Mesh]:
+    """The meshes with ``origin`` subtracted from their vertices (new arrays)."""
+    return [(np.asarray(V, dtype=np.float64) - origin, F) for V, F in meshes]
 
 
 def _solids(meshes: list[Mesh], what: str) -> list:
@@ -283,6 +301,16 @@ def _shells_outside(
     return True
 
 
+#: What `ExactIntersector.pose_sources` says, indexed by the kernel's result code.
+POSE_SOURCES = np.empty(4, dtype="<U7")
+POSE_SOURCES[[kp.OK, kp.CULLED, kp.DEGENERATE, kp.OVERFLOW]] = (
+    "kernel",
+    "culled",
+    "boolean",
+    "boolean",
+)
+
+
 class ExactIntersector:
     """Exact volumes of a fixed hand ∩ a rigidly moved object.
 
@@ -323,8 +351,12 @@ class ExactIntersector:
     ):
         tuning = _check_options(broadphase, n_jobs, tuning)
         self.n_jobs = (os.cpu_count() or 1) if n_jobs == -1 else int(n_jobs)
-        self.hand_solid = union(_solids(hand_links, "hand link"))
-        self.object_solid = union(_solids(object_bodies, "object body"))
+        # Everything is in local coordinates about the centre of the hand's bounds, the unions
+        # too (manifold3d's tolerance grows with the coordinates' magnitude), so that rounding
+        # depends on the geometry's size, not on where it lies.
+        self._origin = _bounds_centre(hand_links)
+        self.hand_solid = union(_solids(_shifted(hand_links, self._origin), "hand link"))
+        self.object_solid = union(_solids(_shifted(object_bodies, self._origin), "object body"))
         self.hand_volume = float(self.hand_solid.volume())
         self.object_volume = float(self.object_solid.volume())
         AV, AF = mesh_arrays(self.hand_solid)
@@ -344,25 +376,19 @@ class ExactIntersector:
         self._cap = int(tuning.get("capacity", 400_000))
         scale = max(np.abs(AV).max(), np.abs(BV).max(), 1e-300)
         self._tiny = 1e-30 * scale**4
-        AD = np.zeros((len(AF), 3))
-        AN = np.zeros((len(AF), 3))
-        face_terms(AV, AF, self._tiny, AD, AN)
+        E, ET = self._A[2], self._A[3]
+        AD, AN, AP, AW, WL = hand_tables(AV, AF, E, ET, self._tiny)
         T = AV[AF]
         ABB = np.ascontiguousarray(np.hstack([T.min(1), T.max(1)]))
-        norm = np.linalg.norm(AN, axis=1)
-        unit = np.divide(AN, norm[:, None], out=np.zeros_like(AN), where=norm[:, None] > 0)
-        AP = np.ascontiguousarray(np.hstack([unit, np.einsum("ij,ij->i", unit, T[:, 0])[:, None]]))
-        E, ET = self._A[2], self._A[3]
-        AW = (
-            np.einsum("ij,ij->i", AD[ET[:, 0]] - AD[ET[:, 1]], np.cross(AV[E[:, 0]], AV[E[:, 1]]))
-            / 6.0
-        )
+        # Object faces: what each one's rounded D can cost (rigid motions keep it).
+        BN = np.cross(BV[BF[:, 1]] - BV[BF[:, 0]], BV[BF[:, 2]] - BV[BF[:, 0]])
+        self._bdc = np.ascontiguousarray(face_d_coefs(*face_conditioning(BV, BF, BN)))
         # The bounding boxes again in the order of the grid's cell lists, so that the search
         # reads them sequentially, each clipped to its cell (grown by the kernel's margin):
         # a crossing in that cell lies in the clipped box.
         CBB = self._cell_boxes(ABB)
         reps = self._cell_reps(AV)
-        epart, wsum, split = self._part_edges(reps, AW)
+        epart, wsum, split = self._part_edges(reps, (AW, WL))
         self._X = (
             AD, AN, ABB, AP, reps, AW, CBB, self._next_listed(),
             self._cell_patches(AV, AF, AN, ABB), epart, wsum, split,
@@ -384,6 +410,7 @@ class ExactIntersector:
             "capacity": self._cap,
         }
         self.stats: dict[str, Any] = {}
+        self.pose_sources: np.ndarray = np.empty(0, dtype="<U7")
 
     def _cell_reps(self, AV: np.ndarray) -> np.ndarray:
         """The hand grid cells holding a vertex (the "parts") and the first vertex in each:
@@ -397,9 +424,11 @@ class ExactIntersector:
             np.stack([np.append(cells, -1), np.append(first, len(AV))], axis=1).astype(np.int64)
         )
 
-    def _part_edges(self, reps: np.ndarray, AW: np.ndarray) -> tuple:
-        """The hand's edges by part (see `kp._edge_sum`): the part of each edge (e,), -1 where
-        its ends lie in two parts; the summed weight of each part's own edges (parts,); and,
+    def _part_edges(self, reps: np.ndarray, AW: tuple) -> tuple:
+        """The hand's edges by part (see `kp._edge_sum`; ``AW`` the weights and their
+        extended-precision values from `hand_tables`): the part of each edge (e,), -1 where
+        its ends lie in two parts; the summed weight of each part's own edges and its error
+        bound (parts, 2, `part_sums`); and,
         the hand's vertex adjacency being reordered here so that each vertex lists its edges
         to other parts first, where those end (vertices,)."""
         V, E, adj_start, adj_vert, adj_edge = (self._A[k] for k in (0, 2, 6, 7, 8))
@@ -407,7 +436,7 @@ class ExactIntersector:
         part = np.searchsorted(reps[:-1, 1], np.arange(len(V)), side="right") - 1
         same = part[E[:, 0]] == part[E[:, 1]]
         epart = np.where(same, part[E[:, 0]], -1).astype(np.int64)
-        wsum = np.bincount(epart[same], weights=AW[same], minlength=nparts)
+        wsum = part_sums(epart, *AW, nparts)
         owner = np.repeat(np.arange(len(V)), np.diff(adj_start))
         order = np.lexsort((same[adj_edge], owner))
         self._A = (
@@ -529,6 +558,7 @@ class ExactIntersector:
                 self._B,
                 self._bchunks,
                 self._bgrid,
+                self._bdc,
                 self._tiny,
                 self._cap,
                 o,
@@ -538,7 +568,7 @@ class ExactIntersector:
             out[idx], codes[idx], stats[idx] = o, c, st
         for i in np.flatnonzero((codes == kp.DEGENERATE) | (codes == kp.OVERFLOW)):
             moved = self.object_solid.transform(poses[i, :3, :])
-            out[i] = (self.hand_solid ^ moved).volume()
+            out[i] = max(0.0, (self.hand_solid ^ moved).volume())
         return out, codes, stats
 
     def volumes(self, poses: np.ndarray) -> np.ndarray:
@@ -559,11 +589,18 @@ class ExactIntersector:
             (hand grid cells),
             ``parts_culled`` / ``parts_inside`` / ``parts_clipped`` (summed over poses:
             cells away from the object's surface and outside / inside it, cells it crosses),
-            ``pairs_tested`` / ``pairs_crossing`` (face pairs) and ``seconds``.
+            ``pairs_tested`` / ``pairs_crossing`` (face pairs) and ``seconds``; and
+            `pose_sources` (same shape as the result) says where each volume came from:
+            ``"kernel"``, ``"culled"`` (exactly 0, see ``docs/exact-backend.md``) or
+            ``"boolean"`` (the manifold3d fallback: an exact coincidence the kernel's signs
+            cannot certify, or a full crossing buffer).
         """
         poses = check_poses(poses)
-        every = poses.reshape(-1, 4, 4)
         t0 = time.perf_counter()
+        # The same motions about the local origin c: x -> R x + (R c + t - c); repeats are
+        # found there, so that their tolerance scales with the local geometry.
+        every = np.array(poses.reshape(-1, 4, 4))
+        every[:, :3, 3] += every[:, :3, :3] @ self._origin - self._origin
         rep = repeated_poses(every)
         uniq, back = np.unique(rep, return_inverse=True)
         flat = np.ascontiguousarray(every[uniq])
@@ -597,6 +634,7 @@ class ExactIntersector:
             "pairs_crossing": int(pairs[1]),
             "seconds": time.perf_counter() - t0,
         }
+        self.pose_sources = POSE_SOURCES[codes].reshape(poses.shape[:-2])
         return out.reshape(poses.shape[:-2])
 
 
