@@ -705,7 +705,7 @@ def _hand_statuses(S, V, R, t, grid, reps, cellmark, whole, uniform):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, bdc, tiny, cap, out, codes, stats):
+def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, bdc, tiny, cap, out, bounds, codes, stats):
     """Volume of A ∩ (pose · B) for each pose; A (the hand) is fixed, B is in its own frame.
 
     ``X = (AD, AN, ABB, AP, reps, AW, CBB, nxt, PT, epart, wsum, split)`` holds per-face
@@ -719,6 +719,8 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, bdc, tiny, cap, out, cod
     faces' rounded ``D`` and the sums' rounding; see docs/exact-backend.md). A volume within
     it of zero is exactly 0; one below minus it is inconsistent and reported DEGENERATE, so no
     negative volume is returned.
+    ``bounds[i]`` is that bound (0 where the volume is certified zero: its own error bound
+    then covers the true volume).
     ``codes[i]`` is OK, DEGENERATE or OVERFLOW (the caller recomputes those with a boolean);
     ``stats[i]`` counts pairs tried, crossing pairs, and A's surface cells touched /
     untouched inside / untouched outside.
@@ -877,6 +879,7 @@ def pose_volumes(poses, A, X, agrid, B, bchunks, bgrid, bdc, tiny, cap, out, cod
             elif vol < 0.0 and code == OK:
                 code = DEGENERATE
             out[ip] = vol
+            bounds[ip] = bound
         codes[ip] = code
         stats[ip, STAT_PAIRS] = npairs
         stats[ip, STAT_CROSSING] = ncross

@@ -301,6 +301,11 @@ def _shells_outside(
     return True
 
 
+#: The boolean fallback's error bound, in manifold3d tolerances times the surfaces' areas.
+BOOLEAN_SLACK = 4.0
+#: Its volumes below this many tolerances times the areas are rounding (8 units in the last
+#: place of coordinates whose magnitude is 1e12 tolerances) and read 0.
+BOOLEAN_ROUNDING = 8 * 2.0**-53 * 1e12
 #: What `ExactIntersector.pose_sources` says, indexed by the kernel's result code.
 POSE_SOURCES = np.empty(4, dtype="<U7")
 POSE_SOURCES[[kp.OK, kp.CULLED, kp.DEGENERATE, kp.OVERFLOW]] = (
@@ -411,6 +416,8 @@ class ExactIntersector:
         }
         self.stats: dict[str, Any] = {}
         self.pose_sources: np.ndarray = np.empty(0, dtype="<U7")
+        self.volume_bounds: np.ndarray = np.empty(0)
+        self._areas = float(self.hand_solid.surface_area() + self.object_solid.surface_area())
 
     def _cell_reps(self, AV: np.ndarray) -> np.ndarray:
         """The hand grid cells holding a vertex (the "parts") and the first vertex in each:
@@ -528,6 +535,7 @@ class ExactIntersector:
     def _chunk(self, poses: np.ndarray):
         n = len(poses)
         out = np.zeros(n)
+        bounds = np.zeros(n)
         codes = np.zeros(n, np.int64)
         stats = np.zeros((n, kp.N_STATS), np.int64)
         todo = np.ones(n, bool)
@@ -548,6 +556,7 @@ class ExactIntersector:
         idx = np.flatnonzero(todo)
         if len(idx):
             o = np.zeros(len(idx))
+            b = np.zeros(len(idx))
             c = np.zeros(len(idx), np.int64)
             st = np.zeros((len(idx), kp.N_STATS), np.int64)
             kp.pose_volumes(
@@ -562,14 +571,30 @@ class ExactIntersector:
                 self._tiny,
                 self._cap,
                 o,
+                b,
                 c,
                 st,
             )
-            out[idx], codes[idx], stats[idx] = o, c, st
+            out[idx], bounds[idx], codes[idx], stats[idx] = o, b, c, st
         for i in np.flatnonzero((codes == kp.DEGENERATE) | (codes == kp.OVERFLOW)):
-            moved = self.object_solid.transform(poses[i, :3, :])
-            out[i] = max(0.0, (self.hand_solid ^ moved).volume())
-        return out, codes, stats
+            out[i], bounds[i] = self._boolean(poses[i])
+        return out, bounds, codes, stats
+
+    def _boolean(self, pose: np.ndarray) -> tuple[float, float]:
+        """The fallback: manifold3d's volume of hand ∩ moved object, and its error bound.
+
+        manifold3d merges what lies within its tolerance (1e-12 of the coordinates'
+        magnitude), which moves the surfaces by up to that much: the bound is
+        `BOOLEAN_SLACK` times the tolerance times both surfaces' areas. A volume below the
+        rounding of coordinates of that magnitude over those areas (`BOOLEAN_ROUNDING`) is 0:
+        touching faces can leave such crumbs, and slight overlaps a tiny negative volume.
+        """
+        moved = self.object_solid.transform(pose[:3, :])
+        volume = (self.hand_solid ^ moved).volume()
+        tolerance = max(self.hand_solid.get_tolerance(), moved.get_tolerance())
+        bound = BOOLEAN_SLACK * tolerance * self._areas
+        crumbs = BOOLEAN_ROUNDING * tolerance * self._areas
+        return (0.0 if volume <= crumbs else float(volume)), bound
 
     def volumes(self, poses: np.ndarray) -> np.ndarray:
         """Exact intersection volume for each pose.
@@ -593,7 +618,10 @@ class ExactIntersector:
             `pose_sources` (same shape as the result) says where each volume came from:
             ``"kernel"``, ``"culled"`` (exactly 0, see ``docs/exact-backend.md``) or
             ``"boolean"`` (the manifold3d fallback: an exact coincidence the kernel's signs
-            cannot certify, or a full crossing buffer).
+            cannot certify, or a full crossing buffer); `volume_bounds` (same shape) bounds
+            each volume's error: ``|volume - true volume| <= bound``, certified for the
+            kernel's poses, 0 for culled ones, manifold3d's tolerance times both areas for
+            the boolean's.
         """
         poses = check_poses(poses)
         t0 = time.perf_counter()
@@ -607,19 +635,20 @@ class ExactIntersector:
         n = len(flat)
         jobs = max(1, min(self.n_jobs, n))
         if jobs == 1:
-            out, codes, stats = self._chunk(flat)
+            out, bounds, codes, stats = self._chunk(flat)
         else:
             # Interleaved chunks balance poses of different cost across threads.
             parts = [np.arange(k, n, jobs) for k in range(jobs)]
             with ThreadPoolExecutor(jobs) as ex:
                 res = list(ex.map(lambda ix: self._chunk(flat[ix]), parts))
             out = np.empty(n)
+            bounds = np.empty(n)
             codes = np.empty(n, np.int64)
             stats = np.empty((n, kp.N_STATS), np.int64)
-            for ix, (o, c, s) in zip(parts, res, strict=True):
-                out[ix], codes[ix], stats[ix] = o, c, s
+            for ix, (o, b, c, s) in zip(parts, res, strict=True):
+                out[ix], bounds[ix], codes[ix], stats[ix] = o, b, c, s
         pairs = stats[:, [kp.STAT_PAIRS, kp.STAT_CROSSING]].sum(0)
-        out, codes, stats = out[back], codes[back], stats[back]
+        out, bounds, codes, stats = out[back], bounds[back], codes[back], stats[back]
         tot = stats.sum(0)
         self.stats = {
             "poses": len(every),
@@ -635,6 +664,7 @@ class ExactIntersector:
             "seconds": time.perf_counter() - t0,
         }
         self.pose_sources = POSE_SOURCES[codes].reshape(poses.shape[:-2])
+        self.volume_bounds = bounds.reshape(poses.shape[:-2])
         return out.reshape(poses.shape[:-2])
 
 
