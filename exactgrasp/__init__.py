@@ -1,6 +1,6 @@
 """exactgrasp: grasp descriptors from hand-object intersection along rigid paths.
 
-The public names follow ``docs/architecture.md``::
+The public names::
 
     import exactgrasp as eg
     sampler = eg.PathSampler.preset("balanced")
@@ -10,26 +10,32 @@ The public names follow ``docs/architecture.md``::
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
-
-from exactgrasp import objects
 from exactgrasp.backends import Backend, available_backends, get_backend, register_backend
 from exactgrasp.descriptor import Descriptor, compute_descriptor, distance, pairwise_distances
 from exactgrasp.errors import (
     BackendError,
+    BatchError,
+    ClosingError,
+    DataError,
+    DescriptorError,
     ExactGraspError,
+    FrameError,
     GraspFileError,
     JointError,
     MeshError,
     MissingDependencyError,
     ModelError,
+    NoiseError,
+    SamplerError,
 )
-from exactgrasp.frames import FrameError, HandFrame
+from exactgrasp.frames import HandFrame
+from exactgrasp.geometry import objects
+from exactgrasp.geometry.solid import Solid
 from exactgrasp.grasp import Grasp
 from exactgrasp.hand import Hand
 from exactgrasp.noise import joint_noise, object_pose_noise
 from exactgrasp.sampling import PathSampler
-from exactgrasp.solid import Solid
+from exactgrasp.version import __version__
 
 
 def __getattr__(name: str):
@@ -53,7 +59,11 @@ def __getattr__(name: str):
 __all__ = [
     "Backend",
     "BackendError",
+    "BatchError",
+    "ClosingError",
+    "DataError",
     "Descriptor",
+    "DescriptorError",
     "ExactGraspError",
     "FrameError",
     "Grasp",
@@ -64,7 +74,9 @@ __all__ = [
     "MeshError",
     "MissingDependencyError",
     "ModelError",
+    "NoiseError",
     "PathSampler",
+    "SamplerError",
     "Solid",
     "__version__",
     "available_backends",

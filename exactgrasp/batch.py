@@ -128,7 +128,7 @@ def _failure(row: ManifestRow, exc: BaseException) -> dict:
 
 
 def _run_params(manifest: Manifest, engine: Backend, sampler: PathSampler, **extra) -> dict:
-    from exactgrasp import __version__
+    from exactgrasp.version import __version__
 
     params = {
         "format": FORMAT,

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import ExactGraspError, require
+from exactgrasp.errors import BatchError, require
 
 FORMAT = "exactgrasp.batch/1"
 PARTS_DIR = "parts"
@@ -40,10 +40,6 @@ LOCK_FILE = ".lock"
 TEMP_MARK = ".tmp-"
 # zstd is deterministic and much smaller than snappy on the many exact zeros of descriptors.
 COMPRESSION = "zstd"
-
-
-class BatchError(ExactGraspError, ValueError):
-    """A bad manifest, an output folder holding another run, or a run that cannot go on."""
 
 
 @dataclass(frozen=True)

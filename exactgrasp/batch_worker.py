@@ -111,7 +111,7 @@ def compute_rows(
             numba.set_num_threads(1)
         except ImportError:
             pass
-    from exactgrasp import __version__
+    from exactgrasp.version import __version__
 
     sampler = PathSampler.from_params(sampler_params)
     engine = _worker_backend(backend)

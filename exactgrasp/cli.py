@@ -124,7 +124,7 @@ def _add_common(parser: argparse.ArgumentParser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``exactgrasp`` command."""
-    from exactgrasp import __version__
+    from exactgrasp.version import __version__
 
     parser = argparse.ArgumentParser(
         prog="exactgrasp",

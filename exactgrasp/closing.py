@@ -18,11 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import ExactGraspError, JointError, require
+from exactgrasp.errors import ClosingError, JointError, require, warn_caller
+from exactgrasp.geometry.solid import Solid
 from exactgrasp.grasp import Grasp, check_pose
 from exactgrasp.hand import Hand
-from exactgrasp.model_compile import _warn
-from exactgrasp.solid import Solid
 
 __all__ = ["ClosingError", "ClosingResult", "FingerResult", "close_fingers", "close_grasp"]
 
@@ -36,10 +35,6 @@ BACKOFF_STEP = 1e-3
 _ADVANCE = 0.9
 _MAX_STEPS = 20_000
 _BVH_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-class ClosingError(ExactGraspError, ValueError):
-    """Fingers cannot be closed: bad options, a penetrating open hand, an object out of reach."""
 
 
 @dataclass(frozen=True)
@@ -145,7 +140,7 @@ def close_fingers(
     scene = _Scene(model, object, pose, engine)
     offset = _backoff(scene, hand, closed, tolerance, backoff)
     if offset > 0:
-        _warn(
+        warn_caller(
             f"close_fingers: the open hand penetrates {object.name}; the object was moved "
             f"{offset * 1e3:.3f} mm out along the palm normal (full_output=True or close_grasp "
             "return the moved pose)"

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from exactgrasp import objects
 from exactgrasp.backends import available_backends
 from exactgrasp.descriptor import Descriptor, compute_descriptor
+from exactgrasp.geometry import objects
 from exactgrasp.grasp import Grasp
 from exactgrasp.sampling import PathSampler
 
@@ -34,8 +34,8 @@ def demo_grasps() -> list[Grasp]:
     -------
     list of Grasp
     """
-    from exactgrasp import hands
     from exactgrasp.closing import close_grasp
+    from exactgrasp.hands.barrett import barrett
 
     knuckle_top = 0.0914
     specs = [
@@ -50,7 +50,7 @@ def demo_grasps() -> list[Grasp]:
             _pose((0, 90, 0), (-0.1, 0.0, knuckle_top + 0.085)),
         ),
     ]
-    return [close_grasp(Grasp(hands.barrett(), obj, pose, name=name)) for name, obj, pose in specs]
+    return [close_grasp(Grasp(barrett(), obj, pose, name=name)) for name, obj, pose in specs]
 
 
 def _plot(descriptors: dict[tuple[str, str], Descriptor], path: Path) -> None:

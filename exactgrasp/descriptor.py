@@ -13,16 +13,12 @@ import numpy as np
 from scipy.spatial.distance import pdist, squareform
 
 from exactgrasp.backends import Backend, get_backend
-from exactgrasp.errors import ExactGraspError
+from exactgrasp.errors import DescriptorError
 from exactgrasp.grasp import Grasp
 from exactgrasp.progress import progress_bar
 from exactgrasp.sampling import PathSampler
 
 DISTANCE_KINDS = ("l2", "l2_diff")
-
-
-class DescriptorError(ExactGraspError, ValueError):
-    """Incomparable descriptors, unreadable descriptor files, or a failed computation."""
 
 
 class Descriptor:
@@ -166,7 +162,7 @@ def compute_descriptor(
     Descriptor
         ``values[p, k]`` = volume(hand ∩ object moved to pose k of path p) / volume(hand).
     """
-    from exactgrasp import __version__
+    from exactgrasp.version import __version__
 
     sampler = _sampler(sampler)
     backend = get_backend(backend, **backend_params)

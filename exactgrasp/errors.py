@@ -1,9 +1,17 @@
-"""Exception types.
+"""Exception types, `require` for optional dependencies and `warn_caller`.
 
-Every message names the input, what is wrong with it and how to fix it.
+Every message names the input, what is wrong with it and how to fix it. Every exception class
+of exactgrasp is defined here (and exported from `exactgrasp`). This module imports nothing from
+exactgrasp; it must stay at the package root (`warn_caller` skips the frames under its folder).
 """
 
 from __future__ import annotations
+
+import sys
+import warnings
+from pathlib import Path
+
+_PACKAGE_DIR = str(Path(__file__).resolve().parent)
 
 
 class ExactGraspError(Exception):
@@ -41,6 +49,42 @@ class MissingDependencyError(ExactGraspError, ImportError):
             f"{feature} needs the optional package {package!r}, which is not installed; "
             f'install it with `pip install {package}` or `pip install "exactgrasp[{extra}]"`.'
         )
+
+
+class FrameError(ExactGraspError, ValueError):
+    """Bad palm-frame parameters."""
+
+
+class SamplerError(ExactGraspError, ValueError):
+    """Bad `PathSampler` parameters."""
+
+
+class NoiseError(ExactGraspError, ValueError):
+    """Bad noise parameters."""
+
+
+class DescriptorError(ExactGraspError, ValueError):
+    """Incomparable descriptors, unreadable descriptor files, or a failed computation."""
+
+
+class BatchError(ExactGraspError, ValueError):
+    """A bad manifest, an output folder holding another run, or a run that cannot go on."""
+
+
+class ClosingError(ExactGraspError, ValueError):
+    """Fingers cannot be closed: bad options, a penetrating open hand, an object out of reach."""
+
+
+class DataError(ExactGraspError, FileNotFoundError):
+    """The shared data folder is missing or incomplete."""
+
+
+def warn_caller(message: str) -> None:
+    """Warn at the first caller outside exactgrasp, however deep inside the package we are."""
+    frame, level = sys._getframe(1), 2
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, UserWarning, stacklevel=level)
 
 
 def require(module: str, feature: str, package: str | None = None, extra: str = "all"):

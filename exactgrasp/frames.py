@@ -13,11 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import ExactGraspError
-
-
-class FrameError(ExactGraspError, ValueError):
-    """Bad palm-frame parameters."""
+from exactgrasp.errors import FrameError
 
 
 def _unit(vector: Any, name: str) -> np.ndarray:

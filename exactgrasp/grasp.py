@@ -19,9 +19,9 @@ import numpy as np
 
 from exactgrasp.errors import GraspFileError
 from exactgrasp.frames import HandFrame
+from exactgrasp.geometry.se3 import is_rigid
+from exactgrasp.geometry.solid import Solid
 from exactgrasp.hand import Hand
-from exactgrasp.se3 import is_rigid
-from exactgrasp.solid import Solid
 
 FORMAT = "exactgrasp.grasp/1"
 

@@ -10,8 +10,8 @@ import numpy as np
 
 from exactgrasp.errors import ExactGraspError, GraspFileError
 from exactgrasp.frames import HandFrame
+from exactgrasp.geometry.solid import Solid, unit_scale
 from exactgrasp.hand import Hand
-from exactgrasp.solid import Solid, unit_scale
 
 
 def _resolve(base_dir: Path, relative: str, source: str, what: str) -> Path:
@@ -65,9 +65,9 @@ def read_hand(data: dict, base_dir: Path, source: str, overrides: dict) -> Hand:
             return Hand.from_urdf(path, joints=joints, frame=frame, on_limit=on_limit, **options)
         kind = spec.get("type")
         if kind == "builtin":
-            from exactgrasp import hands
+            from exactgrasp.hands import get as builtin_hand
 
-            builder = hands.get(spec["name"])
+            builder = builtin_hand(spec["name"])
             options = spec.get("options") or {}
             return builder(joints=joints, frame=frame, on_limit=on_limit, **options)
         if kind == "file":

@@ -18,8 +18,8 @@ import trimesh
 
 from exactgrasp.errors import JointError, MeshError
 from exactgrasp.frames import FrameError, HandFrame
-from exactgrasp.mesh_ops import union_volume
-from exactgrasp.solid import Solid
+from exactgrasp.geometry.manifold import union_volume
+from exactgrasp.geometry.solid import Solid
 
 
 class KinematicModel(Protocol):
@@ -123,7 +123,7 @@ class Hand:
         """A rigid hand from one mesh file: one link, the solid its closed shells bound.
 
         Overlapping shells are merged into one solid with a warning and a shell crossing
-        itself is refused (see `exactgrasp.shells.resolve_shells`).
+        itself is refused (see `exactgrasp.geometry.shells.resolve_shells`).
 
         Parameters
         ----------
@@ -159,7 +159,7 @@ class Hand:
         meshes : sequence
             Closed link meshes in hand coordinates; links may overlap each other, and a link
             of several overlapping shells is merged into the solid they bound (with a
-            warning; see `exactgrasp.solid.Solid`).
+            warning; see `exactgrasp.geometry.solid.Solid`).
         frame : HandFrame
             Required.
         names : sequence of str, optional

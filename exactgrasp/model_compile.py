@@ -10,8 +10,6 @@ from __future__ import annotations
 import json
 import math
 import re
-import sys
-import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -23,9 +21,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from exactgrasp import primitives
-from exactgrasp.errors import MeshError, ModelError, require
-from exactgrasp.shells import resolve_shells
+from exactgrasp.errors import MeshError, ModelError, require, warn_caller
+from exactgrasp.geometry import primitives
+from exactgrasp.geometry.shells import resolve_shells
 
 if TYPE_CHECKING:
     from exactgrasp.models import KinematicModel
@@ -37,15 +35,6 @@ _GEOM_KIND = {0: "plane", 1: "hfield", 2: "sphere", 3: "capsule", 4: "ellipsoid"
 _GEOM_KIND.update({5: "cylinder", 6: "box", 7: "mesh", 8: "sdf"})
 _FREE, _BALL, _SLIDE, _HINGE = range(4)
 _AXES = {"+x": 0, "x": 0, "+y": 1, "y": 1, "+z": 2, "z": 2, "-x": -1, "-y": -2, "-z": -3}
-_PACKAGE_DIR = str(Path(__file__).resolve().parent)
-
-
-def _warn(message: str) -> None:
-    """Warn at the first caller outside exactgrasp, however deep inside the package we are."""
-    frame, level = sys._getframe(1), 2
-    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
-        frame, level = frame.f_back, level + 1
-    warnings.warn(message, UserWarning, stacklevel=level)
 
 
 @dataclass(frozen=True)
@@ -95,8 +84,8 @@ class PalmSpec:
 
 def _weld(V: np.ndarray, F: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
     """Merge duplicate vertices, drop collapsed faces, check the mesh is closed, and resolve
-    its shells (`exactgrasp.shells.resolve_shells`: overlapping shells merged with a warning,
-    a self-crossing shell refused with a `ModelError`).
+    its shells (`exactgrasp.geometry.shells.resolve_shells`: overlapping shells merged with a
+    warning, a self-crossing shell refused with a `ModelError`).
 
     MuJoCo keeps vertices split where normals differ and stores them in float32, so a closed
     mesh file comes out of a compiled model open: copies of one vertex are identical or a
@@ -129,12 +118,12 @@ def _weld(V: np.ndarray, F: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarr
     try:
         # Once per mesh asset, at compile time: posing moves links rigidly, so a resolved
         # link stays resolved in every joint configuration.
-        V, F, _ = resolve_shells(V, F, what, orientation="flip", warn=_warn)
+        V, F, _ = resolve_shells(V, F, what, orientation="flip", warn=warn_caller)
     except MeshError as exc:
         raise ModelError(str(exc)) from None
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     if np.einsum("ij,ij->", a, np.cross(b, c)) < 0:
-        _warn(f"{what} is inside-out (negative volume); its faces were flipped")
+        warn_caller(f"{what} is inside-out (negative volume); its faces were flipped")
         F = F[:, ::-1].copy()
     return V, F
 
@@ -257,7 +246,7 @@ def load_model(
         Which geoms make up the hand. Visual geoms are those that collide with nothing
         (``contype = conaffinity = 0``, MuJoCo's convention and its URDF import's).
     tessellation : int
-        Segments around curved primitive geoms (see `exactgrasp.primitives`).
+        Segments around curved primitive geoms (see `exactgrasp.geometry.primitives`).
     palm : PalmSpec, dict, False or None
         The palm frame: a `PalmSpec` in hand coordinates, or a dict ``{"body" | "site": name,
         "origin": xyz, "normal": "+z" | xyz, "up": "+y" | xyz, "depth": d}`` whose origin and

@@ -14,7 +14,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from exactgrasp.errors import JointError, ModelError, require
+from exactgrasp.errors import JointError, ModelError, require, warn_caller
 from exactgrasp.model_compile import (
     _GEOM_KIND,
     _HFIELD,
@@ -24,7 +24,6 @@ from exactgrasp.model_compile import (
     _SLIDE,
     PalmSpec,
     _geom_mesh,
-    _warn,
     load_model,
 )
 
@@ -98,7 +97,7 @@ class KinematicModel:
                 continue
             (hinge_slide if m.jnt_type[j] in (_HINGE, _SLIDE) else held).append(j)
         if held:
-            _warn(
+            warn_caller(
                 f"{self.source}: free/ball joints {[m.joint(j).name for j in held]} "
                 "are held at their initial pose (only hinge and slide joints are "
                 "exposed)"
@@ -110,7 +109,7 @@ class KinematicModel:
                 continue
             dep, drv, coef = int(m.eq_obj1id[e]), int(m.eq_obj2id[e]), m.eq_data[e][:5]
             if np.any(coef[2:] != 0):
-                _warn(
+                warn_caller(
                     f"{self.source}: non-linear joint equality on "
                     f"{m.joint(dep).name} ignored (joint left independent)"
                 )
@@ -211,7 +210,7 @@ class KinematicModel:
             out[n] = min(max(v, lo), hi)
             clipped.append(f"{n}: {v!r} -> {out[n]!r}")
         if clipped:
-            _warn("joint values clipped to their limits: " + "; ".join(clipped))
+            warn_caller("joint values clipped to their limits: " + "; ".join(clipped))
         full = self.all_joint_values(out)
         for dep in self.couplings:
             slack = self._tols[dep] if tol is None else tol
@@ -263,7 +262,7 @@ class KinematicModel:
         if not_solid:  # planes are infinite; height fields and SDFs are terrain or implicit
             notes.append(f"not closed solids: {', '.join(not_solid)}")
         if notes:
-            _warn(f"{self.source}: geoms left out of the hand: " + "; ".join(notes))
+            warn_caller(f"{self.source}: geoms left out of the hand: " + "; ".join(notes))
         if not kept:
             hint = (
                 f"; {other} geom(s) of the other kind exist: try geometry='all'" if other else ""

@@ -10,15 +10,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from exactgrasp.errors import ExactGraspError
+from exactgrasp.errors import NoiseError
 
 if TYPE_CHECKING:
     from exactgrasp.grasp import Grasp
     from exactgrasp.hand import Hand
-
-
-class NoiseError(ExactGraspError, ValueError):
-    """Bad noise parameters."""
 
 
 def _rng(rng: Any) -> np.random.Generator:

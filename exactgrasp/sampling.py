@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import ExactGraspError
-from exactgrasp.se3 import exp_se3
+from exactgrasp.errors import SamplerError
+from exactgrasp.geometry.se3 import exp_se3
 
 GOLDEN_ANGLE = 2.0 * np.pi * (1.0 - 2.0 / (1.0 + np.sqrt(5.0)))
 
@@ -26,10 +26,6 @@ PRESETS: dict[str, dict[str, int]] = {
 
 AMOUNT_RULES = ("circle", "linspace")
 STEP_RULES = ("paper", "code")
-
-
-class SamplerError(ExactGraspError, ValueError):
-    """Bad `PathSampler` parameters."""
 
 
 def sphere_points(n: int) -> np.ndarray:

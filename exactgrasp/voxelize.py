@@ -17,10 +17,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
 from exactgrasp.errors import BackendError
+from exactgrasp.geometry.winding import winding_inside_lattice
 
 # Keeps floor(resolution * side / longest) from losing a voxel to rounding when the ratio is
 # an integer in exact arithmetic (a 2:1 box at resolution 50 gets 25 voxels, not 24).
@@ -172,114 +172,8 @@ def occupancy_grid(
     origin, spacing, shape = grid_layout(flat.min(axis=0), flat.max(axis=0), resolution, pad, rule)
     # Node (i, j, k) sits at integer coordinates in index space, so column positions are exact.
     local = (triangles - origin) / spacing
-    values = _winding_inside(local, shape[0], shape[1], shape[2])
+    values = winding_inside_lattice(local, shape[0], shape[1], shape[2])
     return Grid(values=values, origin=origin, spacing=spacing)
-
-
-@numba.njit(cache=True)
-def _edge_side(px, py, ax, ay, bx, by):
-    """Side (+1 left, -1 right) of point p for the directed edge a->b, never 0 for a != b.
-
-    The edge is evaluated in one fixed vertex order whichever way it is traversed, so the two
-    triangles that share it get exactly opposite answers.
-    """
-    flip = 1
-    if ax > bx or (ax == bx and ay > by):
-        ax, ay, bx, by = bx, by, ax, ay
-        flip = -1
-    dx = bx - ax
-    dy = by - ay
-    value = dx * (py - ay) - dy * (px - ax)
-    if value > 0.0:
-        return flip
-    if value < 0.0:
-        return -flip
-    # Exactly on the edge's line: decide as if p were moved by (eps, eps**2).
-    if dy != 0.0:
-        return -flip if dy > 0.0 else flip
-    if dx != 0.0:
-        return flip if dx > 0.0 else -flip
-    return 0
-
-
-@numba.njit(cache=True)
-def _edge_value(px, py, ax, ay, bx, by):
-    """Twice the signed area of (a, b, p), in the same fixed vertex order as `_edge_side`."""
-    if ax > bx or (ax == bx and ay > by):
-        return -((ax - bx) * (py - by) - (ay - by) * (px - bx))
-    return (bx - ax) * (py - ay) - (by - ay) * (px - ax)
-
-
-@numba.njit(cache=True)
-def _column_crossings(triangles, nx, ny, count_only, starts, fill, heights, signs):
-    """Visit every (column, triangle) crossing; count them or write height and sign."""
-    for t in range(triangles.shape[0]):
-        ax, ay, az = triangles[t, 0, 0], triangles[t, 0, 1], triangles[t, 0, 2]
-        bx, by, bz = triangles[t, 1, 0], triangles[t, 1, 1], triangles[t, 1, 2]
-        cx, cy, cz = triangles[t, 2, 0], triangles[t, 2, 1], triangles[t, 2, 2]
-        i0 = max(0, int(np.ceil(min(ax, bx, cx))))
-        i1 = min(nx - 1, int(np.floor(max(ax, bx, cx))))
-        j0 = max(0, int(np.ceil(min(ay, by, cy))))
-        j1 = min(ny - 1, int(np.floor(max(ay, by, cy))))
-        for i in range(i0, i1 + 1):
-            px = float(i)
-            for j in range(j0, j1 + 1):
-                py = float(j)
-                s_ab = _edge_side(px, py, ax, ay, bx, by)
-                if s_ab == 0:
-                    continue
-                if _edge_side(px, py, bx, by, cx, cy) != s_ab:
-                    continue
-                if _edge_side(px, py, cx, cy, ax, ay) != s_ab:
-                    continue
-                column = i * ny + j
-                if count_only:
-                    starts[column + 1] += 1
-                    continue
-                # Barycentric weights all share one sign, so the height stays between the
-                # corners' heights even for slivers.
-                wa = _edge_value(px, py, bx, by, cx, cy)
-                wb = _edge_value(px, py, cx, cy, ax, ay)
-                wc = _edge_value(px, py, ax, ay, bx, by)
-                total = wa + wb + wc
-                slot = starts[column] + fill[column]
-                fill[column] += 1
-                heights[slot] = (wa * az + wb * bz + wc * cz) / total
-                # Counter-clockwise in xy means the outward normal points up (+z).
-                signs[slot] = s_ab
-
-
-@numba.njit(cache=True)
-def _winding_inside(triangles, nx, ny, nz):
-    """Nodes (in index coordinates) whose winding number is at least 1, as uint8."""
-    starts = np.zeros(nx * ny + 1, np.int64)
-    fill = np.zeros(nx * ny, np.int64)
-    empty_f = np.zeros(0, np.float64)
-    empty_i = np.zeros(0, np.int8)
-    _column_crossings(triangles, nx, ny, True, starts, fill, empty_f, empty_i)
-    for c in range(nx * ny):
-        starts[c + 1] += starts[c]
-    heights = np.empty(starts[-1], np.float64)
-    signs = np.empty(starts[-1], np.int8)
-    _column_crossings(triangles, nx, ny, False, starts, fill, heights, signs)
-    inside = np.zeros((nx, ny, nz), np.uint8)
-    for c in range(nx * ny):
-        lo, hi = starts[c], starts[c + 1]
-        if hi == lo:
-            continue
-        order = np.argsort(heights[lo:hi])
-        i, j = c // ny, c % ny
-        # Sweep down from the top: the winding number of a node is the sum of the signs of
-        # the crossings above it.
-        winding = 0
-        pointer = hi - lo - 1
-        for k in range(nz - 1, -1, -1):
-            while pointer >= 0 and heights[lo + order[pointer]] > k:
-                winding += signs[lo + order[pointer]]
-                pointer -= 1
-            if winding >= 1:
-                inside[i, j, k] = 1
-    return inside
 
 
 @dataclass(frozen=True)

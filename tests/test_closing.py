@@ -14,7 +14,7 @@ pytest.importorskip("coal", reason="close_fingers' default engine (coal) is not 
 import exactgrasp as eg
 from exactgrasp.closing import ClosingError, close_fingers, close_grasp
 from exactgrasp.errors import JointError
-from exactgrasp.mesh_ops import to_manifold, union
+from exactgrasp.geometry.manifold import to_manifold, union
 
 TOL = 1e-4
 FLEXION = [f"finger_{i}_{part}_joint" for i in (1, 2, 3) for part in ("med", "dist")]

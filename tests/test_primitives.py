@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from exactgrasp import primitives
+from exactgrasp.geometry import primitives
 
 
 def _volume(V, F):

@@ -10,7 +10,7 @@ from scipy import stats
 pytest.importorskip("mujoco", reason="the models extra (mujoco) is not installed")
 
 import exactgrasp as eg
-from exactgrasp.mesh_ops import to_manifold, union
+from exactgrasp.geometry.manifold import to_manifold, union
 from exactgrasp.noise import NoiseError, joint_noise
 from tests.conftest import SHARED_DATA
 

@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from exactgrasp.geometry.se3 import exp_se3, invert_rigid, is_rigid, twist_matrix
 from exactgrasp.sampling import (
     GOLDEN_ANGLE,
     PathSampler,
@@ -10,7 +11,6 @@ from exactgrasp.sampling import (
     sphere_points,
     step_times,
 )
-from exactgrasp.se3 import exp_se3, invert_rigid, is_rigid, twist_matrix
 
 
 @pytest.mark.parametrize(

@@ -15,9 +15,10 @@ from exactgrasp.backends.voxel import (
     estimate_volumes_numpy,
 )
 from exactgrasp.errors import BackendError
+from exactgrasp.geometry.solid import Solid
+from exactgrasp.geometry.winding import winding_inside_lattice
 from exactgrasp.sample import object_points, poisson_disk_surface, surface_area
-from exactgrasp.solid import Solid
-from exactgrasp.voxelize import _winding_inside, hand_occupancy, occupancy_grid
+from exactgrasp.voxelize import hand_occupancy, occupancy_grid
 from tests.conftest import box_arrays
 
 
@@ -89,7 +90,7 @@ def test_rays_through_edges_and_vertices_count_once():
     # Box corners on integer columns: many columns run exactly along face diagonals, edges and
     # vertices. The tie rule puts the low faces inside and the high faces outside.
     vertices, faces = box_arrays([1, 1, 1], [5, 5, 5])
-    inside = _winding_inside(vertices[faces].astype(float), 7, 7, 7)
+    inside = winding_inside_lattice(vertices[faces].astype(float), 7, 7, 7)
     expected = np.zeros((7, 7, 7), np.uint8)
     expected[1:5, 1:5, 1:5] = 1
     np.testing.assert_array_equal(inside, expected)

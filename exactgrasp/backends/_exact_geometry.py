@@ -4,66 +4,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from exactgrasp.backends._exact_kernels import raster_triangles, winding_number
+from exactgrasp.backends._exact_kernels import raster_triangles
 from exactgrasp.errors import MeshError
+
+# The manifold3d adapter is `exactgrasp.geometry.manifold`; its names are re-exported here.
+from exactgrasp.geometry.manifold import mesh_arrays as mesh_arrays
+from exactgrasp.geometry.manifold import to_manifold as to_manifold
+from exactgrasp.geometry.manifold import union_solids as union  # noqa: F401
+from exactgrasp.geometry.winding import winding_number
 
 _REPAIR_HINT = (
     "the exact backend needs closed, consistently oriented surfaces; load the mesh with "
     "repair=True (or fix it in a mesh editor) and try again."
 )
-
-
-def to_manifold(V: np.ndarray, F: np.ndarray, what: str):
-    """A manifold3d solid from a (V, F) pair, or a `MeshError` naming `what`.
-
-    Parameters
-    ----------
-    V : numpy.ndarray, shape (n, 3), float64
-        Vertex coordinates.
-    F : numpy.ndarray, shape (m, 3), int
-        Outward-oriented triangles.
-    what : str
-        Name of the mesh for the error message (``"hand link 3"``).
-    """
-    import manifold3d as m3
-
-    V = np.ascontiguousarray(V, dtype=np.float64)
-    F = np.asarray(F)
-    if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3 or len(F) == 0:
-        raise MeshError(
-            f"{what}: expected vertices (n, 3) and faces (m, 3), got "
-            f"{V.shape} and {F.shape}; pass a non-empty triangle mesh."
-        )
-    if not np.all(np.isfinite(V)):
-        raise MeshError(f"{what}: vertex coordinates contain NaN or infinity; {_REPAIR_HINT}")
-    if F.min() < 0 or F.max() >= len(V):
-        raise MeshError(f"{what}: face indices out of range; {_REPAIR_HINT}")
-    solid = m3.Manifold(
-        m3.Mesh64(vert_properties=V, tri_verts=np.ascontiguousarray(F, dtype=np.uint64))
-    )
-    status = solid.status()
-    if status != m3.Error.NoError or solid.is_empty():
-        raise MeshError(f"{what} is not a closed manifold surface ({status.name}); {_REPAIR_HINT}")
-    if solid.volume() <= 0:
-        raise MeshError(f"{what} has non-positive volume (faces inward?); {_REPAIR_HINT}")
-    return solid
-
-
-def union(solids: list):
-    """Union of manifold3d solids (overlaps counted once)."""
-    import manifold3d as m3
-
-    if len(solids) == 1:
-        return solids[0]
-    return m3.Manifold.batch_boolean(solids, m3.OpType.Add)
-
-
-def mesh_arrays(solid) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (n, 3) float64 and faces (m, 3) int64 of a manifold3d solid."""
-    mesh = solid.to_mesh64()
-    V = np.ascontiguousarray(np.asarray(mesh.vert_properties)[:, :3], dtype=np.float64)
-    F = np.ascontiguousarray(np.asarray(mesh.tri_verts), dtype=np.int64)
-    return V, F
 
 
 def prepare_mesh(V: np.ndarray, F: np.ndarray) -> tuple:

@@ -26,10 +26,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-# Shewchuk's bound on the rounding error of this evaluation order of the determinant is
-# (7 + 56 eps) eps ~ 7.8e-16 times its permanent, and the permanent is at most 6 L^3 when every
-# coordinate difference is at most L: 4.7e-15 L^3, taken with a margin of two.
-_ORIENT_ERR = 1e-14
+# The shared predicates and winding number live in `exactgrasp.geometry`; re-exported here.
+from exactgrasp.geometry.predicates import orient as orient
+from exactgrasp.geometry.predicates import orient_bound as orient_bound
+from exactgrasp.geometry.winding import winding_number as winding_number
 
 #: Unit roundoff of double precision (round to nearest): every error bound below is a multiple.
 U = 2.0**-53
@@ -68,33 +68,7 @@ def face_d_coef(kappa, l1l2):
     return (FACE_D_ERR if kappa <= KAPPA_MAX else FACE_D_ERR_NONE) * U * l1l2
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def orient_bound(extent):
-    """Error bound of `orient` for points whose coordinates span at most `extent`."""
-    return _ORIENT_ERR * extent * extent * extent
-
-
 _NO, _CROSS, _DEGENERATE = 0, 1, 2
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def orient(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
-    """Six times the signed volume of tetrahedron abcd, and whether its sign is certain.
-
-    ``bound`` must bound the rounding error: `orient_bound` of the points' extent.
-    """
-    adx = ax - dx
-    ady = ay - dy
-    adz = az - dz
-    bdx = bx - dx
-    bdy = by - dy
-    bdz = bz - dz
-    cdx = cx - dx
-    cdy = cy - dy
-    cdz = cz - dz
-    det = adz * (bdx * cdy - cdx * bdy) + bdz * (cdx * ady - adx * cdy)
-    det += cdz * (adx * bdy - bdx * ady)
-    return det, abs(det) > bound
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -182,25 +156,6 @@ def edge_weight(V, D, E, ET, e):
     return (
         (D[t1, 0] - D[t2, 0]) * cx + (D[t1, 1] - D[t2, 1]) * cy + (D[t1, 2] - D[t2, 2]) * cz
     ) / 6.0
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def winding_number(x, V, F):
-    """Generalised winding number of point x with respect to a closed mesh (not rounded)."""
-    total = 0.0
-    for f in range(F.shape[0]):
-        a = V[F[f, 0]] - x
-        b = V[F[f, 1]] - x
-        c = V[F[f, 2]] - x
-        la = np.sqrt(a @ a)
-        lb = np.sqrt(b @ b)
-        lc = np.sqrt(c @ c)
-        num = a[0] * (b[1] * c[2] - b[2] * c[1])
-        num += a[1] * (b[2] * c[0] - b[0] * c[2])
-        num += a[2] * (b[0] * c[1] - b[1] * c[0])
-        den = la * lb * lc + (a @ b) * lc + (b @ c) * la + (c @ a) * lb
-        total += 2.0 * np.arctan2(num, den)
-    return total / (4.0 * np.pi)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")

@@ -40,7 +40,7 @@ def check_poses(poses: np.ndarray, name: str = "poses") -> np.ndarray:
         such pose by its index.
     """
     from exactgrasp.errors import BackendError
-    from exactgrasp.se3 import rigid_defects
+    from exactgrasp.geometry.se3 import rigid_defects
 
     arr = np.ascontiguousarray(poses, dtype=np.float64)
     if arr.ndim < 2 or arr.shape[-2:] != (4, 4):

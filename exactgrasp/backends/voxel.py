@@ -15,13 +15,13 @@ their counts are identical.
 from __future__ import annotations
 
 import numbers
-from collections import OrderedDict
 from typing import TYPE_CHECKING, Any
 
 import numba
 import numpy as np
 
 from exactgrasp.backends.base import Backend, check_poses
+from exactgrasp.cache import LRUCache
 from exactgrasp.errors import BackendError
 from exactgrasp.sample import ObjectPoints, object_points
 from exactgrasp.voxelize import GRID_RULES, HandOccupancy, hand_occupancy
@@ -375,8 +375,8 @@ class VoxelBackend(Backend):
         self.surface_samples = surface_samples
         self.surface_weight = surface_weight
         self.seed = int(seed)
-        self._hands: OrderedDict[str, HandOccupancy] = OrderedDict()
-        self._objects: OrderedDict[str, ObjectPoints] = OrderedDict()
+        self._hands = LRUCache(CACHE_SIZE)
+        self._objects = LRUCache(CACHE_SIZE)
 
     @property
     def params(self) -> dict[str, Any]:
@@ -393,8 +393,7 @@ class VoxelBackend(Backend):
 
     def hand_grid(self, grasp: Grasp) -> HandOccupancy:
         """The hand's occupancy grid for `grasp` (cached per ``grasp.hand_key``)."""
-        return _cached(
-            self._hands,
+        return self._hands.get(
             getattr(grasp, "hand_key", None),
             lambda: hand_occupancy(grasp.canonical_hand_links(), self.hand_resolution, self.grid),
         )
@@ -420,7 +419,7 @@ class VoxelBackend(Backend):
                 grid_rule=self.grid,
             )
 
-        return _cached(self._objects, getattr(grasp, "object_key", None), build)
+        return self._objects.get(getattr(grasp, "object_key", None), build)
 
     def volumes(self, grasp: Grasp, poses: np.ndarray) -> np.ndarray:
         """Estimated intersection volume per pose, canonical units cubed.
@@ -436,15 +435,3 @@ class VoxelBackend(Backend):
         """
         poses = check_poses(poses)
         return estimate_volumes(self.hand_grid(grasp), self.object_point_set(grasp), poses)
-
-
-def _cached(store: OrderedDict, key: str | None, build):
-    if key is None:
-        return build()
-    if key in store:
-        store.move_to_end(key)
-        return store[key]
-    value = store[key] = build()
-    while len(store) > CACHE_SIZE:
-        store.popitem(last=False)
-    return value

@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import ExactGraspError
+from exactgrasp.errors import DataError, ExactGraspError
+from exactgrasp.geometry.manifold import to_manifold, union
 from exactgrasp.grasp import Grasp
-from exactgrasp.mesh_ops import to_manifold, union
 
 #: A closed grasp whose hand still overlaps its object by more than this fraction of the hand
 #: volume is not a contact grasp and is skipped.
@@ -30,10 +30,6 @@ MIN_FINGERS = 2
 MAX_BACKOFF = 0.015
 #: Objects whose STL is not closed and must be repaired on reading.
 NEEDS_REPAIR = ("FoodClip",)
-
-
-class DataError(ExactGraspError, FileNotFoundError):
-    """The shared data folder is missing or incomplete."""
 
 
 @dataclass
@@ -186,7 +182,7 @@ def _records(barrett: Path, obj: str) -> list[Path]:
 
 def _close(grasp: Grasp) -> tuple[Any, np.ndarray, dict[str, Any]]:
     """Close the hand onto the object: (hand, object pose after any back-off, notes)."""
-    from exactgrasp import close_fingers
+    from exactgrasp.closing import close_fingers
 
     with warnings.catch_warnings():
         # A back-off is reported in the notes (and the report), not as a warning per record.

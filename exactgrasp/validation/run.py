@@ -230,7 +230,7 @@ def run_validation(
 
     summary["findings"] = findings
     summary["headline"] = headline(summary)
-    from exactgrasp import __version__
+    from exactgrasp.version import __version__
 
     summary["meta"] = {
         "command": command,

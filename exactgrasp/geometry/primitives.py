@@ -17,19 +17,21 @@ from __future__ import annotations
 
 import numpy as np
 
+from exactgrasp.errors import MeshError
+
 __all__ = ["box", "capsule", "cylinder", "ellipsoid", "sphere"]
 
 
 def _check_segments(segments: int) -> int:
     if isinstance(segments, bool) or int(segments) != segments or segments < 4:
-        raise ValueError(f"segments must be an integer >= 4, got {segments!r}")
+        raise MeshError(f"segments must be an integer >= 4, got {segments!r}")
     return int(segments)
 
 
 def _check_positive(name: str, value) -> np.ndarray:
     arr = np.asarray(value, dtype=np.float64)
     if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+        raise MeshError(f"{name} must be finite and > 0, got {value!r}")
     return arr
 
 
@@ -87,7 +89,7 @@ def box(half_extents) -> tuple[np.ndarray, np.ndarray]:
     """
     h = _check_positive("half_extents", half_extents)
     if h.shape != (3,):
-        raise ValueError(f"half_extents must have 3 values, got shape {h.shape}")
+        raise MeshError(f"half_extents must have 3 values, got shape {h.shape}")
     corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
     # corner index = 4*ix + 2*iy + iz; each quad listed counter-clockwise from outside.
     quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
@@ -130,7 +132,7 @@ def ellipsoid(radii, segments: int = 32) -> tuple[np.ndarray, np.ndarray]:
     """
     r = _check_positive("radii", radii)
     if r.shape != (3,):
-        raise ValueError(f"radii must have 3 values, got shape {r.shape}")
+        raise MeshError(f"radii must have 3 values, got shape {r.shape}")
     n = _check_segments(segments)
     bands = max(n // 2, 2)
     polar = np.pi * np.arange(1, bands) / bands

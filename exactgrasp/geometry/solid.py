@@ -2,7 +2,8 @@
 
 Every mesh that enters the library goes through `Solid`, which refuses anything that is not a
 closed, consistently oriented surface of positive volume, with a message that names the input,
-the defect and the fix.
+the defect and the fix. Imports only `exactgrasp.errors`, other `exactgrasp.geometry` modules
+(`intake`, `shells`), numpy and trimesh.
 """
 
 from __future__ import annotations
@@ -18,90 +19,24 @@ import numpy as np
 import trimesh
 
 from exactgrasp.errors import MeshError
-from exactgrasp.shells import resolve_shells
+from exactgrasp.geometry.intake import (
+    MAX_PLAUSIBLE_SIZE_M,
+    ORIENTATIONS,
+    UNITS,
+    load_points,
+    load_trimesh,
+    unit_scale,
+)
+from exactgrasp.geometry.shells import resolve_shells
 
-#: Length of one unit in metres.
-UNITS: dict[str, float] = {
-    "m": 1.0,
-    "cm": 0.01,
-    "mm": 0.001,
-    "inch": 0.0254,
-    "in": 0.0254,
-}
-
-#: A grasped object or a hand longer than this (in metres) was almost surely read in the
-#: wrong unit (millimetres read as metres is a factor 1000).
-MAX_PLAUSIBLE_SIZE_M = 5.0
-
-ORIENTATIONS = ("flip", "refuse")
-
-
-def unit_scale(units: str) -> float:
-    """Metres per unit.
-
-    Parameters
-    ----------
-    units : {"m", "cm", "mm", "inch"}
-
-    Returns
-    -------
-    float
-    """
-    try:
-        return UNITS[units]
-    except KeyError:
-        raise MeshError(
-            f"units={units!r} is not known; use one of {sorted(set(UNITS) - {'in'})}."
-        ) from None
-
-
-def _load_trimesh(path: Path) -> trimesh.Trimesh:
-    if not path.exists():
-        raise MeshError(
-            f"{path}: no such file; check the path (relative paths are resolved "
-            f"from {Path.cwd()})."
-        )
-    try:
-        loaded = trimesh.load(path, force="mesh", process=False)
-    except Exception as exc:
-        raise MeshError(
-            f"{path}: trimesh could not read it ({type(exc).__name__}: {exc}); "
-            "use a mesh format trimesh reads (STL, OBJ, PLY, OFF, GLB)."
-        ) from exc
-    if not isinstance(loaded, trimesh.Trimesh):
-        raise MeshError(f"{path}: holds no triangle mesh (read as {type(loaded).__name__}).")
-    return loaded
-
-
-def load_points(source: Any, units: str = "m", name: str = "surface_samples") -> np.ndarray:
-    """Read surface sample points from a file (PLY, XYZ, ...) or an array.
-
-    Parameters
-    ----------
-    source : path or array_like, shape (k, 3)
-    units : str
-        Unit of the points; they are returned in metres.
-    name : str
-        Used in messages.
-
-    Returns
-    -------
-    numpy.ndarray, shape (k, 3), float64, metres
-    """
-    if isinstance(source, str | os.PathLike):
-        path = Path(source)
-        if not path.exists():
-            raise MeshError(f"{name}: {path}: no such file; check the path.")
-        loaded = trimesh.load(path, process=False)
-        points = np.asarray(getattr(loaded, "vertices", loaded), dtype=np.float64)
-        name = str(path)
-    else:
-        points = np.asarray(source, dtype=np.float64)
-    if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
-        raise MeshError(f"{name}: expected (k, 3) points with k >= 1, got shape {points.shape}.")
-    if not np.all(np.isfinite(points)):
-        raise MeshError(f"{name}: points contain NaN or infinite coordinates; remove them.")
-    return points * unit_scale(units)
+__all__ = [
+    "MAX_PLAUSIBLE_SIZE_M",
+    "ORIENTATIONS",
+    "UNITS",
+    "Solid",
+    "load_points",
+    "unit_scale",
+]
 
 
 class Solid:
@@ -109,7 +44,7 @@ class Solid:
 
     A mesh of several closed shells is read as the solid they bound: disjoint bodies and
     cavities are kept, overlapping or redundant shells are merged with a warning, a shell
-    that crosses itself is refused (see `exactgrasp.shells` and ``docs/solids.md``).
+    that crosses itself is refused (see `exactgrasp.geometry.shells` and ``docs/solids.md``).
 
     Parameters
     ----------
@@ -143,8 +78,8 @@ class Solid:
         ``{"volume_before", "volume_after", "actions"}`` when ``repair`` changed the mesh.
     shell_report : dict or None
         How the mesh's closed shells relate and what was done about it (see
-        `exactgrasp.shells.resolve_shells`): ``n_shells``, per-shell ``shells`` (vertex and
-        face counts, signed volume, role: outer, cavity, island, merged, redundant,
+        `exactgrasp.geometry.shells.resolve_shells`): ``n_shells``, per-shell ``shells``
+        (vertex and face counts, signed volume, role: outer, cavity, island, merged, redundant,
         flipped), ``crossing_pairs``, ``touching_pairs``, ``actions`` (empty when the mesh
         was kept as is), ``volume_before``, ``volume_after`` (m^3). Overlapping shells are
         merged into the solid they bound (points of winding number >= 1), with a warning;
@@ -219,7 +154,7 @@ class Solid:
         Solid
         """
         path = Path(path)
-        mesh = _load_trimesh(path)
+        mesh = load_trimesh(path)
         solid = cls(mesh.vertices, mesh.faces, units=units, name=str(path), **kwargs)
         samples = kwargs.get("surface_samples")
         solid.source = {

@@ -26,10 +26,7 @@ are tested (their shared corner gives uncertain signs, never a certain crossing)
 
 from __future__ import annotations
 
-import sys
-import warnings
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -37,47 +34,25 @@ from numba import njit
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from exactgrasp.errors import MeshError
+from exactgrasp.errors import MeshError, warn_caller
+from exactgrasp.geometry.manifold import to_manifold
+from exactgrasp.geometry.predicates import orient_bound, orient_det
+from exactgrasp.geometry.winding import winding_number
 
 __all__ = ["find_crossings", "resolve_shells", "split_shells"]
 
-# Shewchuk's bound on the rounding of `_orient` is (7 + 56 eps) eps times the permanent, at
-# most 6 L^3 for coordinates spanning L: 4.7e-15 L^3, taken with a margin of two.
-_ORIENT_ERR = 1e-14
 _NO, _CROSS, _UNSURE = 0, 1, 2
+_MERGE_FIX = (
+    "overlapping shells cannot be merged; fix the mesh in a modeller (e.g. MeshLab's "
+    "'Remove Duplicate Vertices' and 'Repair non Manifold Vertices')."
+)
 _SELF_FIX = (
     "fix the mesh in a modeller (e.g. MeshLab's 'Select Self Intersecting Faces', then delete "
     "them and close the hole, or Blender's 3D-print toolbox 'Intersect Face')"
 )
 
-_PACKAGE_DIR = str(Path(__file__).resolve().parent)
-
-
-def _warn_outside(message: str) -> None:
-    """Warn at the first caller outside exactgrasp, however deep inside the package we are."""
-    frame, level = sys._getframe(1), 2
-    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
-        frame, level = frame.f_back, level + 1
-    warnings.warn(message, UserWarning, stacklevel=level)
-
 
 # -- numba kernels ----------------------------------------------------------------------------
-
-
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _orient(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
-    """Six times the signed volume of tetrahedron abcd (sign > 0: d below abc's plane)."""
-    adx = ax - dx
-    ady = ay - dy
-    adz = az - dz
-    bdx = bx - dx
-    bdy = by - dy
-    bdz = bz - dz
-    cdx = cx - dx
-    cdy = cy - dy
-    cdz = cz - dz
-    det = adz * (bdx * cdy - cdx * bdy) + bdz * (cdx * ady - adx * cdy)
-    return det + cdz * (adx * bdy - bdx * ady)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
@@ -103,15 +78,15 @@ def _edge_tri(X, e0, e1, a, b, c, bound):
     ax, ay, az = X[a, 0], X[a, 1], X[a, 2]
     bx, by, bz = X[b, 0], X[b, 1], X[b, 2]
     cx, cy, cz = X[c, 0], X[c, 1], X[c, 2]
-    dp = _orient(ax, ay, az, bx, by, bz, cx, cy, cz, px, py, pz)
-    dq = _orient(ax, ay, az, bx, by, bz, cx, cy, cz, qx, qy, qz)
+    dp = orient_det(ax, ay, az, bx, by, bz, cx, cy, cz, px, py, pz)
+    dq = orient_det(ax, ay, az, bx, by, bz, cx, cy, cz, qx, qy, qz)
     sp = _sign(dp, bound)
     sq = _sign(dq, bound)
     if sp != 0 and sp == sq:
         return _NO, 0.0
-    s1 = _sign(_orient(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz), bound)
-    s2 = _sign(_orient(px, py, pz, qx, qy, qz, bx, by, bz, cx, cy, cz), bound)
-    s3 = _sign(_orient(px, py, pz, qx, qy, qz, cx, cy, cz, ax, ay, az), bound)
+    s1 = _sign(orient_det(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz), bound)
+    s2 = _sign(orient_det(px, py, pz, qx, qy, qz, bx, by, bz, cx, cy, cz), bound)
+    s3 = _sign(orient_det(px, py, pz, qx, qy, qz, cx, cy, cz, ax, ay, az), bound)
     if (s1 > 0 or s2 > 0 or s3 > 0) and (s1 < 0 or s2 < 0 or s3 < 0):
         return _NO, 0.0
     if sp == 0 or sq == 0 or s1 == 0 or s2 == 0 or s3 == 0:
@@ -140,8 +115,7 @@ def _tri_tri(V, F, t, u, skip_shared, X, out):
             lo = min(lo, X[k, ax])
             hi = max(hi, X[k, ax])
         ext = max(ext, hi - lo)
-    ext *= 1.0 + 1e-12
-    bound = _ORIENT_ERR * ext * ext * ext
+    bound = orient_bound(ext * (1.0 + 1e-12))
     # Cheap rejection: one triangle certainly on one side of the other's plane. With
     # ``skip_shared``, a corner shared by both is left out: the pair then meets only there.
     for first in range(2):
@@ -154,7 +128,7 @@ def _tri_tri(V, F, t, u, skip_shared, X, out):
             if skip_shared and (vk == F[ta, 0] or vk == F[ta, 1] or vk == F[ta, 2]):
                 continue
             s = _sign(
-                _orient(X[a, 0], X[a, 1], X[a, 2], X[a + 1, 0], X[a + 1, 1], X[a + 1, 2],
+                orient_det(X[a, 0], X[a, 1], X[a, 2], X[a + 1, 0], X[a + 1, 1], X[a + 1, 2],
                         X[a + 2, 0], X[a + 2, 1], X[a + 2, 2],
                         X[b + k, 0], X[b + k, 1], X[b + k, 2]),
                 bound,
@@ -258,25 +232,6 @@ def _pair_scan(V, F, shell, lo, hi, i0, n, keys, tris):
     )
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def _winding(x, V, F):
-    """Generalised winding number of point x (3,) with respect to the closed mesh (V, F)."""
-    total = 0.0
-    for f in range(F.shape[0]):
-        a = V[F[f, 0]] - x
-        b = V[F[f, 1]] - x
-        c = V[F[f, 2]] - x
-        la = np.sqrt(a @ a)
-        lb = np.sqrt(b @ b)
-        lc = np.sqrt(c @ c)
-        num = a[0] * (b[1] * c[2] - b[2] * c[1])
-        num += a[1] * (b[2] * c[0] - b[0] * c[2])
-        num += a[2] * (b[0] * c[1] - b[1] * c[0])
-        den = la * lb * lc + (a @ b) * lc + (b @ c) * la + (c @ a) * lb
-        total += 2.0 * np.arctan2(num, den)
-    return total / (4.0 * np.pi)
-
-
 # -- topology and crossings -------------------------------------------------------------------
 
 
@@ -372,24 +327,6 @@ def _compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.ascontiguousarray(V[used]), inverse.reshape(-1, 3).astype(np.int64)
 
 
-def _manifold(V: np.ndarray, F: np.ndarray, what: str):
-    import manifold3d as m3
-
-    solid = m3.Manifold(
-        m3.Mesh64(
-            vert_properties=np.ascontiguousarray(V, dtype=np.float64),
-            tri_verts=np.ascontiguousarray(F, dtype=np.uint64),
-        )
-    )
-    if solid.status() != m3.Error.NoError:
-        raise MeshError(
-            f"{what}: manifold3d refuses it as a solid ({solid.status().name}), so overlapping "
-            "shells cannot be merged; fix the mesh in a modeller (e.g. MeshLab's "
-            "'Remove Duplicate Vertices' and 'Repair non Manifold Vertices')."
-        )
-    return solid
-
-
 def _fmt_shells(indices, shells) -> str:
     return ", ".join(f"{i} ({shells[i]['vertices']} vertices)" for i in indices)
 
@@ -416,7 +353,7 @@ def resolve_shells(
         What to do with a reversed shell that lies inside no other shell (an inside-out
         body) when there are several shells: flip it (and what it holds) with a warning, or
         refuse. A mesh of one shell is returned as is whatever its orientation: the caller
-        decides (`exactgrasp.solid.Solid` does, with the same option).
+        decides (`exactgrasp.geometry.solid.Solid` does, with the same option).
     warn : callable, optional
         Called with the warning text when the mesh is changed; default `warnings.warn` at
         the first caller outside exactgrasp.
@@ -502,7 +439,7 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
     def inside(x: np.ndarray, j: int) -> bool:
         if np.any(x < lo[j]) or np.any(x > hi[j]):
             return False
-        return abs(_winding(x, parts[j][0], parts[j][1])) > 0.5
+        return abs(winding_number(x, parts[j][0], parts[j][1])) > 0.5
 
     # Which shells hold each cluster (its surfaces meet none of theirs, so one point decides).
     holders = []
@@ -603,11 +540,15 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
         solid = None
         if pos:
             solid = m3.Manifold.batch_boolean(
-                [_manifold(*parts[i], f"{name} shell {i}") for i in pos], m3.OpType.Add
+                [to_manifold(*parts[i], f"{name} shell {i}", _MERGE_FIX) for i in pos],
+                m3.OpType.Add,
             )
         if neg:
             holes = m3.Manifold.batch_boolean(
-                [_manifold(parts[i][0], parts[i][1][:, ::-1], f"{name} shell {i}") for i in neg],
+                [
+                    to_manifold(parts[i][0], parts[i][1][:, ::-1], f"{name} shell {i}", _MERGE_FIX)
+                    for i in neg
+                ],
                 m3.OpType.Add,
             )
             solid = holes if solid is None else solid - holes
@@ -646,5 +587,5 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
         f"{report['volume_before']:.6g} -> {after:.6g} m^3 (the solid is the set of points of "
         "winding number >= 1)."
     )
-    (warn or _warn_outside)(message)
+    (warn or warn_caller)(message)
     return new_v, new_f, report

@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import manifold3d
 
-from exactgrasp.mesh_ops import manifold_arrays
-from exactgrasp.solid import Solid
+from exactgrasp.geometry.manifold import mesh_arrays
+from exactgrasp.geometry.solid import Solid
 
 
 def _solid(shape: manifold3d.Manifold, name: str) -> Solid:
-    vertices, faces = manifold_arrays(shape)
+    vertices, faces = mesh_arrays(shape)
     return Solid(vertices, faces, name=name)
 
 

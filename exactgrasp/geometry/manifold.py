@@ -1,0 +1,110 @@
+"""The manifold3d adapter: solids from (vertices, faces) arrays, unions, and arrays back.
+
+Everything in exactgrasp that hands meshes to manifold3d goes through `to_manifold`, which
+refuses, naming the mesh, the defect and the fix, what manifold3d cannot take as a solid.
+Double precision throughout (``Mesh64``). Imports only `exactgrasp.errors`, numpy and manifold3d.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import manifold3d
+import numpy as np
+
+from exactgrasp.errors import MeshError
+
+__all__ = ["MeshArrays", "mesh_arrays", "to_manifold", "union", "union_solids", "union_volume"]
+
+MeshArrays = tuple[np.ndarray, np.ndarray]
+
+REPAIR_HINT = (
+    "manifold3d needs a closed, consistently oriented surface; load the mesh with repair=True "
+    "(or fix it in a mesh editor) and try again."
+)
+
+
+def to_manifold(
+    vertices: np.ndarray, faces: np.ndarray, name: str = "mesh", fix: str | None = None
+) -> manifold3d.Manifold:
+    """A manifold3d solid from arrays, or a `MeshError` naming the mesh.
+
+    Parameters
+    ----------
+    vertices : numpy.ndarray, shape (n, 3), float
+    faces : numpy.ndarray, shape (m, 3), int
+        Outward-oriented triangles.
+    name : str
+        The mesh, in messages (``"hand link 3"``).
+    fix : str, optional
+        How to fix a mesh manifold3d refuses, in messages; default `REPAIR_HINT`.
+
+    Returns
+    -------
+    manifold3d.Manifold
+        Of positive volume.
+    """
+    fix = fix or REPAIR_HINT
+    V = np.ascontiguousarray(vertices, dtype=np.float64)
+    F = np.asarray(faces)
+    if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3 or len(F) == 0:
+        raise MeshError(
+            f"{name}: expected vertices (n, 3) and faces (m, 3), got "
+            f"{V.shape} and {F.shape}; pass a non-empty triangle mesh."
+        )
+    if not np.all(np.isfinite(V)):
+        raise MeshError(f"{name}: vertex coordinates contain NaN or infinity; {fix}")
+    if F.min() < 0 or F.max() >= len(V):
+        raise MeshError(f"{name}: face indices out of range; {fix}")
+    # Copies: manifold3d takes writable arrays only (a Solid's arrays are read-only).
+    solid = manifold3d.Manifold(
+        manifold3d.Mesh64(
+            vert_properties=np.array(V, dtype=np.float64, order="C"),
+            tri_verts=np.array(F, dtype=np.uint64, order="C"),
+        )
+    )
+    status = solid.status()
+    if status != manifold3d.Error.NoError or solid.is_empty():
+        raise MeshError(
+            f"{name}: manifold3d refuses it as a solid ({status.name}): it is not a closed "
+            f"manifold surface; {fix}"
+        )
+    if solid.volume() <= 0:
+        raise MeshError(f"{name} has non-positive volume (faces inward?); {fix}")
+    return solid
+
+
+def union_solids(solids: Sequence[manifold3d.Manifold]) -> manifold3d.Manifold:
+    """Union of manifold3d solids (overlaps counted once)."""
+    if len(solids) == 1:
+        return solids[0]
+    return manifold3d.Manifold.batch_boolean(list(solids), manifold3d.OpType.Add)
+
+
+def union(parts: Sequence[MeshArrays], name: str = "hand") -> manifold3d.Manifold:
+    """Union of closed parts that may overlap.
+
+    Parameters
+    ----------
+    parts : sequence of (vertices (n, 3), faces (m, 3))
+    name : str
+        The whole, in messages (part ``i`` is ``"{name} part {i}"``).
+
+    Returns
+    -------
+    manifold3d.Manifold
+    """
+    return union_solids([to_manifold(v, f, f"{name} part {i}") for i, (v, f) in enumerate(parts)])
+
+
+def union_volume(parts: Sequence[MeshArrays], name: str = "hand") -> float:
+    """Volume of the union of closed parts (overlaps counted once), in cubed input units."""
+    return float(union(parts, name).volume())
+
+
+def mesh_arrays(solid: manifold3d.Manifold) -> MeshArrays:
+    """Vertices (n, 3) float64 and faces (m, 3) int64 of a manifold3d solid, C-contiguous."""
+    mesh = solid.to_mesh64()
+    V = np.ascontiguousarray(np.asarray(mesh.vert_properties)[:, :3], dtype=np.float64)
+    F = np.ascontiguousarray(np.asarray(mesh.tri_verts), dtype=np.int64)
+    return V, F
