@@ -25,8 +25,7 @@ def orient_bound(extent):
 def orient_det(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
     """Six times the signed volume of tetrahedron abcd (sign > 0: d below abc's plane).
 
-    The same evaluation order as `orient` (bit-identical determinants); inlined at numba's
-    IR level into its callers.
+    `orient` evaluates it too; inlined at numba's IR level into its callers.
     """
     adx = ax - dx
     ady = ay - dy
@@ -48,15 +47,5 @@ def orient(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
 
     ``bound`` must bound the rounding error: `orient_bound` of the points' extent.
     """
-    adx = ax - dx
-    ady = ay - dy
-    adz = az - dz
-    bdx = bx - dx
-    bdy = by - dy
-    bdz = bz - dz
-    cdx = cx - dx
-    cdy = cy - dy
-    cdz = cz - dz
-    det = adz * (bdx * cdy - cdx * bdy) + bdz * (cdx * ady - adx * cdy)
-    det += cdz * (adx * bdy - bdx * ady)
+    det = orient_det(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz)
     return det, abs(det) > bound
