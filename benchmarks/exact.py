@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     sys.path.insert(0, str(ROOT))
     from exactgrasp.backends.exact import ExactIntersector, agrees, plain_volumes
-    from exactgrasp.sampling import PathSampler
+    from exactgrasp.paths.sampler import PathSampler
 
     flat = PathSampler.preset("balanced").poses().reshape(-1, 4, 4)
     kind = "balanced preset"

@@ -28,13 +28,13 @@ from exactgrasp.errors import (
     NoiseError,
     SamplerError,
 )
-from exactgrasp.frames import HandFrame
 from exactgrasp.geometry import objects
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.grasp import Grasp
-from exactgrasp.hand import Hand
-from exactgrasp.noise import joint_noise, object_pose_noise
-from exactgrasp.sampling import PathSampler
+from exactgrasp.grasp.noise import joint_noise, object_pose_noise
+from exactgrasp.hands.frame import HandFrame
+from exactgrasp.hands.hand import Hand
+from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.version import __version__
 
 
@@ -44,7 +44,7 @@ def __getattr__(name: str):
 
     lazy = {
         "hands": ("exactgrasp.hands", None),
-        "close_fingers": ("exactgrasp.closing", "close_fingers"),
+        "close_fingers": ("exactgrasp.grasp.closing", "close_fingers"),
         "compare_backends": ("exactgrasp.compare", "compare_backends"),
         "run_batch": ("exactgrasp.batch", "run_batch"),
         "read_batch": ("exactgrasp.batch", "read_batch"),

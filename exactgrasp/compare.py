@@ -16,7 +16,7 @@ from exactgrasp.backends import Backend, get_backend
 from exactgrasp.descriptor import compute_volumes
 from exactgrasp.errors import ExactGraspError
 from exactgrasp.grasp import Grasp
-from exactgrasp.sampling import PathSampler
+from exactgrasp.paths.sampler import PathSampler
 
 #: Reference values below this fraction of the hand volume count as zero when forming
 #: relative errors (a ratio to a near-zero volume says nothing about the estimator).

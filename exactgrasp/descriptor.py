@@ -15,8 +15,8 @@ from scipy.spatial.distance import pdist, squareform
 from exactgrasp.backends import Backend, get_backend
 from exactgrasp.errors import DescriptorError
 from exactgrasp.grasp import Grasp
+from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.progress import progress_bar
-from exactgrasp.sampling import PathSampler
 
 DISTANCE_KINDS = ("l2", "l2_diff")
 

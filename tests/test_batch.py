@@ -25,7 +25,7 @@ pytest.importorskip("pyarrow")
 import exactgrasp as eg
 from exactgrasp import hands, objects
 from exactgrasp.batch import BatchError, read_batch, read_manifest, run_batch
-from exactgrasp.batch_io import run_lock
+from exactgrasp.batch.store import run_lock
 from exactgrasp.cli import main
 
 SAMPLER = eg.PathSampler(3, 2, 2, n_steps=3)

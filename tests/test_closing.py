@@ -12,9 +12,9 @@ pytest.importorskip("mujoco", reason="the models extra (mujoco) is not installed
 pytest.importorskip("coal", reason="close_fingers' default engine (coal) is not installed")
 
 import exactgrasp as eg
-from exactgrasp.closing import ClosingError, close_fingers, close_grasp
 from exactgrasp.errors import JointError
 from exactgrasp.geometry.manifold import to_manifold, union
+from exactgrasp.grasp.closing import ClosingError, close_fingers, close_grasp
 
 TOL = 1e-4
 FLEXION = [f"finger_{i}_{part}_joint" for i in (1, 2, 3) for part in ("med", "dist")]
@@ -233,7 +233,7 @@ def test_bad_hand_object_and_pose(cylinder_grasp):
 
 def test_no_palm_needs_explicit_joints(cylinder_grasp):
     from exactgrasp.hands.barrett import BARRETT_MJCF
-    from exactgrasp.models import load_model
+    from exactgrasp.hands.model import load_model
 
     _, obj, pose = cylinder_grasp
     model = load_model("no_palm.xml", xml=BARRETT_MJCF, palm=False)
@@ -255,7 +255,7 @@ def test_object_wholly_inside_the_palm_is_found():
 
 def test_model_closing_joints_attribute_is_the_default(cylinder_grasp):
     from exactgrasp.hands.barrett import BARRETT_MJCF, BARRETT_PALM
-    from exactgrasp.models import load_model
+    from exactgrasp.hands.model import load_model
 
     _, obj, pose = cylinder_grasp
     model = load_model("two_fingers.xml", xml=BARRETT_MJCF, palm=BARRETT_PALM)

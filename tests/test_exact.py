@@ -340,8 +340,8 @@ def test_real_spray_bottle_grasp_matches_plain_boolean():
 
 def test_ray_status_agrees_with_winding_number():
     """The exact point test used for shells with no classified vertex (`ray_status`)."""
-    from exactgrasp.backends._exact_geometry import build_grid
-    from exactgrasp.backends._exact_kernels import ray_status, winding_number
+    from exactgrasp.backends.exact.kernels import ray_status, winding_number
+    from exactgrasp.backends.exact.tables import build_grid
 
     V, F = sphere(1.0, np.zeros(3), 2)
     grid = build_grid(V, F, 0.25)
@@ -362,7 +362,7 @@ def test_small_shell_inside_object_surface_cells_matches_plain_boolean():
     """A hand made of a large box and a tiny separate box just under the object's surface:
     every vertex of the tiny shell lies in a cell the object's surface touches, so its status
     comes from the exact point test, not from the grid."""
-    from exactgrasp.backends._exact_kernels import point_status
+    from exactgrasp.backends.exact.kernels import point_status
 
     big = box([0, 0, 0], [2, 2, 2])
     tiny = box([2.302, 0.905, 0.905], [2.312, 0.915, 0.915])
@@ -385,7 +385,7 @@ def test_small_shell_inside_object_surface_cells_matches_plain_boolean():
 
 def test_surfaces_cross_is_certain_and_keeps_culling_unchanged():
     """The kernel's cheap test that spares the BVH query: True only where surfaces cross."""
-    from exactgrasp.backends import _exact_pose as kp
+    from exactgrasp.backends.exact import pose as kp
 
     links, objs = overlapping_hand()
     ex = ExactIntersector(links, objs, broadphase="coal")
@@ -436,7 +436,7 @@ def test_cells_classified_whole_match_analytic_overlap():
 def test_hand_parts_tables_are_consistent():
     """Vertices numbered cell by cell; each part's summed edge weight and the split of every
     vertex's adjacency (edges to other parts first) as the kernel assumes."""
-    from exactgrasp.backends._exact_geometry import vertex_cells
+    from exactgrasp.backends.exact.tables import vertex_cells
 
     hand = fine_box([-1, -1, -1], [1, 1, 1], 3)
     ex = ExactIntersector([hand], [box([0, 0, 0], [2, 2, 2])], broadphase=None)
@@ -460,7 +460,7 @@ def test_hand_parts_tables_are_consistent():
 def test_triangle_box_test_against_linear_programme():
     """`tri_box_xyz` (any half sizes) against an LP: does a point of the triangle lie in the
     box?"""
-    from exactgrasp.backends._exact_kernels import tri_box_xyz
+    from exactgrasp.backends.exact.kernels import tri_box_xyz
 
     rng = np.random.default_rng(8)
     hits = 0

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import exactgrasp as eg
-from exactgrasp.frames import FrameError
+from exactgrasp.hands.frame import FrameError
 from tests.conftest import box_arrays
 
 

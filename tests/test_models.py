@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("mujoco", reason="the models extra (mujoco) is not installed")
 
 from exactgrasp.errors import JointError, ModelError
-from exactgrasp.models import PalmSpec, load_model
+from exactgrasp.hands.model import PalmSpec, load_model
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "barrett-grasps"
 URDF = DATA / "hand" / "barrett.urdf"
@@ -282,7 +282,7 @@ def test_builtin_barrett_distal_coupling():
 
 
 def test_builtin_barrett_hand():
-    pytest.importorskip("exactgrasp.hand", reason="exactgrasp.hand not written yet")
+    pytest.importorskip("exactgrasp.hands.hand", reason="exactgrasp.hands.hand not written yet")
     import exactgrasp.hands as hands
 
     hand = hands.barrett(joints={"finger_1_med_joint": 1.0})

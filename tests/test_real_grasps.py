@@ -11,7 +11,7 @@ pytest.importorskip("mujoco", reason="the models extra (mujoco) is not installed
 
 import exactgrasp as eg
 from exactgrasp.geometry.manifold import to_manifold, union
-from exactgrasp.noise import NoiseError, joint_noise
+from exactgrasp.grasp.noise import NoiseError, joint_noise
 from tests.conftest import SHARED_DATA
 
 GRASPS = SHARED_DATA / "barrett-grasps" / "grasps"

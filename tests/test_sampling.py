@@ -3,7 +3,7 @@ import pytest
 import scipy.linalg
 
 from exactgrasp.geometry.se3 import exp_se3, invert_rigid, is_rigid, twist_matrix
-from exactgrasp.sampling import (
+from exactgrasp.paths.sampler import (
     GOLDEN_ANGLE,
     PathSampler,
     SamplerError,

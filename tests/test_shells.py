@@ -10,9 +10,9 @@ import pytest
 import trimesh
 
 from exactgrasp import MeshError, Solid
-from exactgrasp.frames import HandFrame
 from exactgrasp.geometry.shells import find_crossings, resolve_shells, split_shells
-from exactgrasp.hand import Hand
+from exactgrasp.hands.frame import HandFrame
+from exactgrasp.hands.hand import Hand
 from tests.conftest import box_arrays
 
 # Two overlapping boxes: 0.5^3 + 0.5 * 0.35 * 0.4 - 0.25 * 0.35 * 0.3.

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from exactgrasp.cli import main
-from exactgrasp.validation import roc_auc
-from exactgrasp.validation.descriptors import neighbour_agreement
-from exactgrasp.validation.estimator import error_summary
-from exactgrasp.validation.noise import separation
-from exactgrasp.validation.report import clean
+from exactgrasp.report import roc_auc
+from exactgrasp.report.descriptors import neighbour_agreement
+from exactgrasp.report.estimator import error_summary
+from exactgrasp.report.noise import separation
+from exactgrasp.report.write import clean
 
 
 def test_missing_data_folder_is_a_clear_error(tmp_path, capsys):

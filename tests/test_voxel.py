@@ -14,11 +14,11 @@ from exactgrasp.backends.voxel import (
     estimate_volumes,
     estimate_volumes_numpy,
 )
+from exactgrasp.backends.voxel.grids import hand_occupancy, occupancy_grid
+from exactgrasp.backends.voxel.points import object_points, poisson_disk_surface, surface_area
 from exactgrasp.errors import BackendError
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.geometry.winding import winding_inside_lattice
-from exactgrasp.sample import object_points, poisson_disk_surface, surface_area
-from exactgrasp.voxelize import hand_occupancy, occupancy_grid
 from tests.conftest import box_arrays
 
 
@@ -332,7 +332,7 @@ def test_public_api_grasp():
 
 def test_grid_rules_on_the_flat_cereal_box(shared_data):
     """The authors' floor rule leaves up to a voxel of each short side out; "round" does not."""
-    from exactgrasp.sample import object_points
+    from exactgrasp.backends.voxel.points import object_points
 
     obj = Solid.from_file(shared_data / "osu-objects" / "CerealBox.STL", units="mm")
     bodies = [(obj.vertices, obj.faces)]

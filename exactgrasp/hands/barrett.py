@@ -26,14 +26,14 @@ from __future__ import annotations
 
 from functools import lru_cache
 
-from exactgrasp.models import KinematicModel, load_model
+from exactgrasp.hands.model import KinematicModel, load_model
 
 __all__ = ["BARRETT_MJCF", "BARRETT_PALM", "DISTAL_RATIO", "barrett", "barrett_model"]
 
 #: Distal/medial ratio of the real hand's built-in finger coupling.
 DISTAL_RATIO = 12.0 / 35.0
 
-#: The built-in hand's palm frame, read by `exactgrasp.models.load_model` from the site.
+#: The built-in hand's palm frame, read by `exactgrasp.hands.model.load_model` from the site.
 BARRETT_PALM = {"site": "palm_face", "normal": "+z", "up": "+y", "depth": 0.085}
 
 _FINGER_12 = """
@@ -127,14 +127,14 @@ def barrett(
     distal_coupling, tessellation
         See `barrett_model`.
     **hand_kwargs
-        Passed to `exactgrasp.hand.Hand` (``frame``, ``on_limit``).
+        Passed to `exactgrasp.hands.hand.Hand` (``frame``, ``on_limit``).
 
     Returns
     -------
-    exactgrasp.hand.Hand
+    exactgrasp.hands.hand.Hand
         With the hand's palm frame unless ``frame=`` is given.
     """
-    from exactgrasp.hand import Hand
+    from exactgrasp.hands.hand import Hand
 
     model = barrett_model(bool(distal_coupling), int(tessellation))
     source = {

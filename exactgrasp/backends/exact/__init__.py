@@ -1,0 +1,21 @@
+"""The exact backend: certified intersection volumes, the plain boolean reference and the kernel."""
+
+from exactgrasp.backends.exact.backend import (
+    FLOOR,
+    RTOL,
+    ExactBackend,
+    ExactIntersector,
+    agrees,
+    plain_volumes,
+    repeated_poses,
+)
+
+__all__ = [
+    "FLOOR",
+    "RTOL",
+    "ExactBackend",
+    "ExactIntersector",
+    "agrees",
+    "plain_volumes",
+    "repeated_poses",
+]

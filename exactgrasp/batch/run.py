@@ -1,0 +1,399 @@
+"""``exactgrasp batch``: the descriptor of every grasp in a manifest, resumable, on many cores.
+
+Work is cut into parts of ``part_size`` consecutive manifest rows. Each part is one task on a
+dask.distributed cluster (a local cluster of single-threaded processes by default, or an
+existing scheduler); the workers only compute and send results back, and this process writes
+every file, so workers need no shared file system and each part is renamed into place whole.
+A resume skips the parts already there. See ``docs/batch.md`` for the file layout and the
+choices made.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import sys
+import time
+from collections import deque
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from exactgrasp.backends import Backend, get_backend
+from exactgrasp.batch.store import (
+    DESCRIPTORS_FILE,
+    ERRORS_FILE,
+    FORMAT,
+    TIMINGS_FILE,
+    BatchError,
+    Manifest,
+    ManifestRow,
+    check_run_record,
+    consolidate,
+    part_path,
+    read_batch,
+    read_manifest,
+    read_part,
+    remove_temp_files,
+    run_lock,
+    write_part,
+)
+from exactgrasp.batch.worker import _as_sampler, _default_workers, _open_pool, compute_rows
+from exactgrasp.paths.sampler import PathSampler
+from exactgrasp.progress import progress_bar
+
+__all__ = [
+    "DEFAULT_PART_SIZE",
+    "BatchError",
+    "BatchSummary",
+    "add_parser",
+    "compute_rows",
+    "read_batch",
+    "read_manifest",
+    "run_batch",
+]
+
+DEFAULT_PART_SIZE = 32
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class BatchSummary:
+    """What a batch run did.
+
+    Attributes
+    ----------
+    out : pathlib.Path
+        The output folder.
+    n_rows : int
+        Rows in the manifest.
+    done, failed : int
+        Rows with a descriptor / rows in ``errors.jsonl``, over this run and earlier ones.
+    computed, skipped : int
+        Rows computed by this run / found already computed by an earlier run.
+    seconds : float
+        Wall time of this run, cluster start included (s).
+    compute_seconds : float
+        Wall time from the first task submitted to the last part written (s).
+    workers : int
+        Worker processes (threads on an existing cluster); 0 when run in this process.
+    """
+
+    out: Path
+    n_rows: int
+    done: int
+    failed: int
+    computed: int
+    skipped: int
+    seconds: float
+    compute_seconds: float
+    workers: int
+
+    @property
+    def ok(self) -> bool:
+        """True when no row failed."""
+        return self.failed == 0
+
+    @property
+    def exit_status(self) -> int:
+        """0 when every row has a descriptor, 1 when any failed."""
+        return 0 if self.ok else 1
+
+    def text(self) -> str:
+        """A one-paragraph report for the terminal."""
+        rate = 60.0 * self.computed / self.compute_seconds if self.compute_seconds > 0 else 0.0
+        failed = (
+            f"{self.failed} failed (see {self.out / ERRORS_FILE})" if self.failed else "0 failed"
+        )
+        return (
+            f"{self.n_rows} grasps: {self.done} done, {failed}; {self.computed} computed now, "
+            f"{self.skipped} already done; {self.seconds:.1f} s in all, {rate:.1f} grasps/min "
+            f"on {self.workers} worker(s) -> {self.out / DESCRIPTORS_FILE}"
+        )
+
+
+# -- the run ------------------------------------------------------------------------------------
+
+
+def _failure(row: ManifestRow, exc: BaseException) -> dict:
+    # The whole task died (a worker crashed or was lost), not the grasp's computation.
+    message = f"the worker computing this grasp was lost: {exc}"
+    return {"id": row.id, "row": row.index, "values": None, "metadata": None,
+            "error": type(exc).__name__, "message": message}  # fmt: skip
+
+
+def _run_params(manifest: Manifest, engine: Backend, sampler: PathSampler, **extra) -> dict:
+    from exactgrasp.version import __version__
+
+    params = {
+        "format": FORMAT,
+        "exactgrasp_version": __version__,
+        "backend": engine.name,
+        "backend_params": engine.params,
+        "sampler": sampler.params,
+        "n_paths": sampler.n_paths,
+        "n_steps": sampler.n_steps,
+        "manifest_sha256": manifest.sha256,
+        "n_rows": len(manifest.rows),
+        **extra,
+    }
+    # Through JSON and back, so that it compares equal to the run.json read on a resume.
+    return json.loads(json.dumps(params))
+
+
+def run_batch(
+    manifest: str | os.PathLike,
+    out: str | os.PathLike,
+    backend: str | Backend = "voxel",
+    sampler: PathSampler | str | dict | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    backend_params: dict | None = None,
+    progress: bool | None = None,
+    part_size: int = DEFAULT_PART_SIZE,
+    on_limit: str | None = None,
+    retry_failed: bool = False,
+) -> BatchSummary:
+    """Compute the descriptor of every grasp in a manifest into a folder; resume if killed.
+
+    Parameters
+    ----------
+    manifest : path-like
+        ``.jsonl`` or ``.parquet``; rows ``{"id": ..., "grasp": path or inline grasp}``.
+    out : path-like
+        Output folder (created). Running again with the same arguments finishes what is left.
+    backend : str or Backend
+        ``"voxel"`` (default) or ``"exact"`` or a registered name.
+    sampler : PathSampler or str or dict, optional
+        Default: the ``"balanced"`` preset.
+    workers : int, optional
+        Worker processes of the local cluster (default: the cores this process may use);
+        0 computes in this process without a cluster. Not allowed with ``scheduler``.
+    scheduler : str, optional
+        Address of a running dask scheduler (``tcp://host:8786``); its workers must be able
+        to import exactgrasp and read the grasp files.
+    backend_params : dict, optional
+        Passed to `get_backend`.
+    progress : bool, optional
+        Progress bar; default only on a terminal.
+    part_size : int
+        Manifest rows per part (the unit of work and of resuming).
+    on_limit : {"error", "clip"}, optional
+        Overrides what grasp files say about joint values outside the limits.
+    retry_failed : bool
+        Compute again the parts that hold failed rows.
+
+    Returns
+    -------
+    BatchSummary
+        ``exit_status`` is 1 when any row failed.
+
+    Raises
+    ------
+    BatchError
+        A bad manifest (before any work), or an output folder holding another run.
+    """
+    started = time.perf_counter()
+    if scheduler is not None and workers is not None:
+        raise BatchError("workers= sets up a local cluster; with scheduler= use its workers.")
+    for name, value, low in (("workers", workers, 0), ("part_size", part_size, 1)):
+        if value is not None and (not isinstance(value, int | np.integer) or value < low):
+            raise BatchError(f"{name} must be an integer >= {low}, got {value!r}.")
+    if on_limit not in (None, "error", "clip"):
+        raise BatchError(f"on_limit must be 'error' or 'clip', got {on_limit!r}.")
+    sampler = _as_sampler(sampler)
+    engine = get_backend(backend, **(backend_params or {}))
+    spec = engine if isinstance(backend, Backend) else (backend, dict(backend_params or {}))
+    manifest = read_manifest(manifest)
+    params = _run_params(manifest, engine, sampler, on_limit=on_limit, part_size=part_size)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    n_parts = -(-len(manifest.rows) // part_size)
+    n_values = sampler.n_paths * sampler.n_steps
+    with run_lock(out):
+        check_run_record(out, params)
+        remove_temp_files(out)
+        parts = [manifest.rows[p * part_size : (p + 1) * part_size] for p in range(n_parts)]
+        present = _existing_parts(out, parts, n_values, retry_failed)
+        skipped = sum(len(parts[p]) for p in present)
+        todo = {p: rows for p, rows in enumerate(parts) if p not in present}
+        n_workers, compute_seconds = 0, 0.0
+        if todo:
+            if workers is None and scheduler is None:
+                workers = _default_workers()
+            with _open_pool(workers, scheduler) as pool:
+                n_workers, compute_start = pool.workers, time.perf_counter()
+                expected = [params["exactgrasp_version"], params["backend_params"]]
+                task = (str(manifest.base_dir), spec, sampler.params, on_limit, expected)
+                _compute(pool, todo, task, out, n_values, len(manifest.rows), skipped, progress)
+                compute_seconds = time.perf_counter() - compute_start
+        done, failed = consolidate(out, n_parts, params)
+    summary = BatchSummary(
+        out=out,
+        n_rows=len(manifest.rows),
+        done=done,
+        failed=failed,
+        computed=len(manifest.rows) - skipped,
+        skipped=skipped,
+        seconds=time.perf_counter() - started,
+        compute_seconds=compute_seconds,
+        workers=n_workers,
+    )
+    with open(out / TIMINGS_FILE, "a") as handle:
+        record = {k: v for k, v in summary.__dict__.items() if k != "out"}
+        handle.write(json.dumps({"run": record}) + "\n")
+    return summary
+
+
+def _existing_parts(out: Path, parts: list, n_values: int, retry_failed: bool) -> set[int]:
+    """The parts a previous run completed; parts that are not valid are removed."""
+    present = set()
+    for part, rows in enumerate(parts):
+        table = read_part(out, part, rows, n_values)
+        path = part_path(out, part)
+        if table is None and path.exists():
+            log.warning("%s is not a valid part of this run; computing it again", path)
+        retry = table is not None and retry_failed and table.column("error").null_count < len(rows)
+        if table is None or retry:
+            path.unlink(missing_ok=True)
+        else:
+            present.add(part)
+    return present
+
+
+def _compute(pool, todo: dict, task: tuple, out: Path, n_values, n_rows, skipped, progress):
+    """Run the parts in ``todo`` (part -> rows) through ``pool``; write each part when all its
+    rows are in, and its wall and CPU seconds to the timings file."""
+    queue = deque(todo.items())
+    collected: dict[int, dict[int, dict]] = {p: {} for p in todo}
+    spent = {p: [0.0, 0.0] for p in todo}
+    with (
+        progress_bar(n_rows, "grasps", progress) as bar,
+        open(out / TIMINGS_FILE, "a") as timings,
+    ):
+        bar.update(skipped)
+
+        def fill():
+            while queue and pool.in_flight < pool.window:
+                part, rows = queue.popleft()
+                pool.submit((part, rows), (rows, *task))
+
+        fill()
+        for (part, rows), outcome, error in pool.completed():
+            if error is not None and len(rows) > 1:
+                # Find the grasp that kills its worker: run the part's rows one by one.
+                log.warning("part %d failed as a whole (%s); retrying row by row", part, error)
+                queue.extendleft((part, [row]) for row in reversed(rows))
+            else:
+                for result in [_failure(rows[0], error)] if error else outcome["results"]:
+                    collected[part][result["row"]] = result
+                if outcome:
+                    spent[part][0] += outcome["seconds"]
+                    spent[part][1] += outcome["cpu_seconds"]
+                if len(collected[part]) == len(todo[part]):
+                    got = collected.pop(part)
+                    write_part(out, part, [got[row.index] for row in todo[part]], n_values)
+                    wall, cpu = spent[part]
+                    worker = outcome["worker"] if outcome else None
+                    line = {"part": part, "rows": len(todo[part]), "seconds": wall}
+                    line.update(cpu_seconds=cpu, worker=worker)
+                    timings.write(json.dumps(line) + "\n")
+                    timings.flush()
+                    bar.update(len(todo[part]))
+            fill()
+    if collected:
+        raise BatchError(f"parts {sorted(collected)} were not completed; run again to resume.")
+
+
+# -- the command line ---------------------------------------------------------------------------
+
+
+def _cli_sampler(text: str, steps: int | None) -> PathSampler:
+    overrides = {"n_steps": steps} if steps else {}
+    if text.lstrip().startswith("{"):
+        try:
+            params = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise BatchError(f"--sampler {text!r}: not valid JSON ({exc}).") from exc
+        return PathSampler(**{**params, **overrides})
+    return PathSampler.preset(text, **overrides)
+
+
+def cmd_batch(args: argparse.Namespace) -> int:
+    """Handler of ``exactgrasp batch``; returns 0 when every row succeeded, 1 otherwise."""
+    from exactgrasp.cli.main import _backend_params
+
+    summary = run_batch(
+        args.manifest,
+        args.out,
+        backend=args.backend,
+        sampler=_cli_sampler(args.sampler, args.steps),
+        workers=args.workers,
+        scheduler=args.scheduler,
+        backend_params=_backend_params(args.param),
+        progress=args.progress,
+        part_size=args.part_size,
+        on_limit=args.on_limit,
+        retry_failed=args.retry_failed,
+    )
+    print(summary.text(), file=sys.stdout)
+    return summary.exit_status
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add the ``batch`` subcommand to the ``exactgrasp`` command's subparsers."""
+    parser = subparsers.add_parser(
+        "batch",
+        help="descriptors of every grasp in a manifest, resumable, on local cores or a cluster",
+        description=(
+            "Compute the descriptor of every grasp listed in MANIFEST (.jsonl or .parquet; rows "
+            '{"id": ..., "grasp": "path/to/grasp.json" or an inline grasp}) into --out. Run the '
+            "same command again after a kill to finish what is left. Exit status 1 when any "
+            "row failed (see OUT/errors.jsonl), 2 on a bad manifest or arguments."
+        ),
+    )
+    parser.add_argument("manifest", help="manifest file (.jsonl or .parquet)")
+    parser.add_argument("--out", required=True, help="output folder (created; resumed if there)")
+    parser.add_argument("--backend", default="voxel", help="voxel (default) or exact")
+    parser.add_argument(
+        "--param", action="append", default=[], metavar="KEY=VALUE", help="backend parameter"
+    )
+    parser.add_argument(
+        "--sampler",
+        default="balanced",
+        help="preset (balanced, translations, rotations) or JSON parameters, e.g. "
+        '\'{"n_translations": 3, "n_axes": 2, "n_amounts": 2, "n_steps": 3}\'',
+    )
+    parser.add_argument("--steps", type=int, default=None, help="poses per path (default 9)")
+    parser.add_argument(
+        "--workers", type=int, default=None, help="local worker processes (default: all cores)"
+    )
+    parser.add_argument("--scheduler", default=None, help="address of a running dask scheduler")
+    parser.add_argument(
+        "--part-size",
+        type=int,
+        default=DEFAULT_PART_SIZE,
+        help=f"rows per part, the unit of resuming (default {DEFAULT_PART_SIZE})",
+    )
+    parser.add_argument(
+        "--retry-failed", action="store_true", help="compute the parts with failed rows again"
+    )
+    parser.add_argument(
+        "--on-limit",
+        default=None,
+        choices=["error", "clip"],
+        help="joint values outside the limits (default: what each grasp file says)",
+    )
+    parser.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="progress bar (default: only on a terminal)",
+    )
+    parser.set_defaults(func=cmd_batch)
+    return parser

@@ -1,0 +1,261 @@
+"""The worker side of ``exactgrasp batch``: computing rows, and the pools that run parts.
+
+Split from `exactgrasp.batch` so that module keeps the run logic (parts, resume, files) and
+this one what executes on a worker process or in this process.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import os
+import socket
+import time
+import uuid
+from collections import deque
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from exactgrasp.backends import Backend, get_backend
+from exactgrasp.batch.store import BatchError, ManifestRow
+from exactgrasp.errors import require
+from exactgrasp.paths.sampler import PathSampler
+
+log = logging.getLogger("exactgrasp.batch")
+
+#: Set in local worker processes before they start: one process per core already fills the
+#: machine, so numba, OpenMP and BLAS thread pools inside a worker would only oversubscribe it.
+THREAD_ENV = {
+    "NUMBA_NUM_THREADS": "1",
+    "OMP_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+}
+
+
+# -- on the workers -----------------------------------------------------------------------------
+
+# Backends built in this worker process, by parameters: their caches (hand grids, object
+# points) then serve every later grasp with the same hand or object.
+_WORKER_BACKENDS: dict[str, Backend] = {}
+
+
+def _worker_backend(spec: Backend | tuple[str, dict]) -> Backend:
+    if isinstance(spec, Backend):
+        return spec
+    name, params = spec
+    key = json.dumps([name, params], sort_keys=True)
+    if key not in _WORKER_BACKENDS:
+        _WORKER_BACKENDS[key] = get_backend(name, **params)
+    return _WORKER_BACKENDS[key]
+
+
+def _load_grasp(row: ManifestRow, base_dir: Path, on_limit: str | None):
+    from exactgrasp.grasp import Grasp
+
+    if row.problem is not None:
+        raise BatchError(row.problem)
+    overrides = {} if on_limit is None else {"on_limit": on_limit}
+    if isinstance(row.grasp, str):
+        path = Path(row.grasp)
+        return Grasp.from_file(path if path.is_absolute() else base_dir / path, **overrides)
+    data = {"name": row.id, **row.grasp}
+    source = f"inline grasp of id {row.id!r}"
+    return Grasp.from_dict(data, base_dir=base_dir, source=source, **overrides)
+
+
+def compute_rows(
+    rows: list[ManifestRow],
+    base_dir: str,
+    backend: Backend | tuple[str, dict],
+    sampler_params: dict,
+    on_limit: str | None = None,
+    expected: list | None = None,
+    single_thread: bool = True,
+) -> dict[str, Any]:
+    """Descriptors of some manifest rows; the task run on a worker.
+
+    Parameters
+    ----------
+    rows : list of ManifestRow
+    base_dir : str
+        Folder relative grasp paths are resolved against (the manifest's).
+    backend : Backend or (str, dict)
+        A backend, or its name and parameters (built once per worker process).
+    sampler_params : dict
+        `PathSampler.params`.
+    on_limit : {"error", "clip"} or None
+        Overrides the grasp files' ``on_limit``.
+    expected : [str, dict], optional
+        The exactgrasp version and backend parameters of the run; rows fail when this worker's
+        differ.
+    single_thread : bool
+        Run numba kernels on one thread (a worker per core already fills the machine).
+
+    Returns
+    -------
+    dict
+        ``results``: one dict per row (``id``, ``row``, ``values`` shape (n_paths * n_steps,)
+        or None, ``metadata`` JSON text or None, ``error``, ``message``); ``seconds``;
+        ``worker``.
+    """
+    from exactgrasp.descriptor import compute_descriptor
+
+    start, cpu_start = time.perf_counter(), time.process_time()
+    if single_thread:
+        try:
+            import numba
+
+            numba.set_num_threads(1)
+        except ImportError:
+            pass
+    from exactgrasp.version import __version__
+
+    sampler = PathSampler.from_params(sampler_params)
+    engine = _worker_backend(backend)
+    mismatch = None
+    have = json.loads(json.dumps([__version__, engine.params]))
+    if expected is not None and have != expected:
+        # Workers importing other code than the client would mix results under one run.json.
+        mismatch = (
+            f"this worker runs exactgrasp {have[0]} with {engine.name} parameters {have[1]}, "
+            f"the run expects {expected[0]} with {expected[1]}; install the same exactgrasp "
+            "on the client and every worker"
+        )
+    results = []
+    for row in rows:
+        result = {"id": row.id, "row": row.index, "values": None, "metadata": None}
+        try:
+            if mismatch:
+                raise BatchError(mismatch)
+            grasp = _load_grasp(row, Path(base_dir), on_limit)
+            descriptor = compute_descriptor(grasp, sampler, engine, progress=False)
+            # Timings differ run to run; the rest of the metadata is a function of the input.
+            metadata = {k: v for k, v in descriptor.metadata.items() if k != "seconds"}
+            result["values"] = descriptor.values.ravel()
+            result["metadata"] = json.dumps(metadata, sort_keys=True)
+            result.update(error=None, message=None)
+        except Exception as exc:  # one bad grasp is reported and the batch goes on
+            result.update(error=type(exc).__name__, message=str(exc) or repr(exc))
+        results.append(result)
+    return {
+        "results": results,
+        "seconds": time.perf_counter() - start,
+        "cpu_seconds": time.process_time() - cpu_start,
+        "worker": f"{socket.gethostname()}:{os.getpid()}",
+    }
+
+
+# -- pools: in this process, or on dask.distributed --------------------------------------------
+
+
+class _SerialPool:
+    """Tasks run here, one at a time, when asked for results (for debugging and tiny runs)."""
+
+    workers = 0
+    window = 1
+
+    def __init__(self):
+        self._queue: deque = deque()
+
+    def submit(self, chunk: tuple, args: tuple) -> None:
+        self._queue.append((chunk, args))
+
+    @property
+    def in_flight(self) -> int:
+        return len(self._queue)
+
+    def completed(self):
+        while self._queue:
+            chunk, args = self._queue.popleft()
+            try:
+                yield chunk, compute_rows(*args, single_thread=False), None
+            except Exception as exc:
+                yield chunk, None, exc
+
+
+class _DaskPool:
+    """Tasks on a dask.distributed cluster, a bounded number in flight."""
+
+    def __init__(self, client: Any):
+        from distributed import as_completed
+
+        self.client = client
+        self.workers = max(sum(client.nthreads().values()), 1)
+        # Enough queued work to keep every worker busy while results come back.
+        self.window = 2 * self.workers + 2
+        self._futures = as_completed()
+        self._chunks: dict[str, tuple] = {}
+        self._token = uuid.uuid4().hex[:8]
+
+    def submit(self, chunk: tuple, args: tuple) -> None:
+        part, rows = chunk
+        suffix = f"-row{rows[0].index}" if len(rows) == 1 else ""
+        key = f"exactgrasp-batch-{self._token}-part{part}{suffix}"
+        future = self.client.submit(compute_rows, *args, key=key, pure=False, retries=0)
+        self._chunks[future.key] = chunk
+        self._futures.add(future)
+
+    @property
+    def in_flight(self) -> int:
+        return len(self._chunks)
+
+    def completed(self):
+        for future in self._futures:
+            chunk = self._chunks.pop(future.key)
+            try:
+                outcome, error = future.result(), None
+            except Exception as exc:
+                outcome, error = None, exc
+            future.release()
+            yield chunk, outcome, error
+
+
+@contextlib.contextmanager
+def _open_pool(workers: int | None, scheduler: str | None) -> Iterator[Any]:
+    """The pool for ``workers`` / ``scheduler``, closed (cluster included) on the way out."""
+    if scheduler is None and workers == 0:
+        yield _SerialPool()
+        return
+    require("distributed", "exactgrasp batch", "distributed", "batch")
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        with Client(scheduler) as client:
+            yield _DaskPool(client)
+        return
+    cluster = LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        # Any free port: a fixed one (8787) clashes with other clusters on the machine.
+        dashboard_address=":0",
+        silence_logs=logging.ERROR,
+        env=THREAD_ENV,
+    )
+    with cluster, Client(cluster) as client:
+        yield _DaskPool(client)
+
+
+def _default_workers() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        return os.cpu_count() or 1
+
+
+def _as_sampler(sampler: PathSampler | str | dict | None) -> PathSampler:
+    if sampler is None:
+        return PathSampler.preset("balanced")
+    if isinstance(sampler, PathSampler):
+        return sampler
+    if isinstance(sampler, str):
+        return PathSampler.preset(sampler)
+    if isinstance(sampler, dict):
+        return PathSampler.from_params(sampler)
+    raise BatchError(
+        f"sampler must be a PathSampler, a preset name or a dict of its parameters, got "
+        f"{type(sampler).__name__}."
+    )

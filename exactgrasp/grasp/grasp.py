@@ -1,0 +1,218 @@
+"""A grasp: a hand, an object and the object's pose in the hand, with JSON files.
+
+The JSON schema is the one of the shared Barrett data (``barrett-grasps/``): ``object`` (path
+relative to the file), ``object_units``, ``object_pose_in_hand`` (object metres -> hand
+coordinates), ``hand_model`` (path relative to the file) and ``joints``; files written here add
+``format``, ``hand`` (how to rebuild the hand when it is not a model file) and ``hand_frame``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from exactgrasp.errors import GraspFileError
+from exactgrasp.geometry.se3 import is_rigid
+from exactgrasp.geometry.solid import Solid
+from exactgrasp.hands.frame import HandFrame
+from exactgrasp.hands.hand import Hand
+
+FORMAT = "exactgrasp.grasp/1"
+
+
+def check_pose(pose: Any, name: str = "object_pose") -> np.ndarray:
+    """Validate a rigid 4x4 transform.
+
+    Parameters
+    ----------
+    pose : array_like, shape (4, 4)
+    name : str
+        Used in the message.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4, 4), float64
+    """
+    arr = np.asarray(pose, dtype=np.float64)
+    if arr.shape != (4, 4):
+        raise GraspFileError(f"{name} must be a 4x4 matrix, got shape {arr.shape}.")
+    if not np.all(np.isfinite(arr)):
+        raise GraspFileError(f"{name} contains NaN or infinite entries.")
+    if not is_rigid(arr, atol=1e-5):
+        raise GraspFileError(
+            f"{name} is not a rigid transform (rotation part not orthonormal with det +1, or "
+            "last row not 0 0 0 1); scale the object with units=..., not with the pose."
+        )
+    return arr
+
+
+class Grasp:
+    """A hand, an object and where the object sits in the hand.
+
+    Parameters
+    ----------
+    hand : Hand
+    object : Solid
+        In its own coordinates (m).
+    object_pose : array_like, shape (4, 4), optional
+        Rigid map from object coordinates (m) to hand coordinates (m); identity by default.
+    name : str, optional
+    """
+
+    def __init__(self, hand: Hand, object: Solid, object_pose: Any = None, name: str = ""):
+        if not isinstance(hand, Hand):
+            raise GraspFileError(f"hand must be an exactgrasp Hand, got {type(hand).__name__}.")
+        if not isinstance(object, Solid):
+            raise GraspFileError(
+                f"object must be an exactgrasp Solid, got {type(object).__name__}; wrap meshes "
+                "with Solid.from_trimesh or Solid.from_file."
+            )
+        self.hand = hand
+        self.object = object
+        self.object_pose = check_pose(np.eye(4) if object_pose is None else object_pose)
+        self.name = name
+
+    # -- what backends read -------------------------------------------------------------------
+
+    @property
+    def frame(self) -> HandFrame:
+        """The hand's canonical frame."""
+        return self.hand.frame
+
+    @cached_property
+    def _object_to_canonical(self) -> np.ndarray:
+        return self.frame.matrix @ self.object_pose
+
+    def canonical_hand_links(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Hand links in the canonical frame: ``[(vertices (n, 3), faces (m, 3) int64)]``."""
+        return self.hand.canonical_links()
+
+    def canonical_object_bodies(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The object at the grasp pose, canonical frame: ``[(vertices (n, 3), faces)]``.
+
+        One entry holding every shell of the object (a hollow object's inner shell must stay
+        with its outer one).
+        """
+        m = self._object_to_canonical
+        return [(self.object.vertices @ m[:3, :3].T + m[:3, 3], self.object.faces)]
+
+    def canonical_object_surface_samples(self) -> np.ndarray | None:
+        """User-supplied surface samples of the object in the canonical frame, or None.
+
+        Returns
+        -------
+        numpy.ndarray, shape (k, 3), or None
+        """
+        samples = self.object.surface_samples
+        if samples is None:
+            return None
+        m = self._object_to_canonical
+        return samples @ m[:3, :3].T + m[:3, 3]
+
+    @property
+    def canonical_hand_volume(self) -> float:
+        """Hand volume (union of links) in canonical units: ``hand.volume * scale**3``."""
+        return self.hand.volume * self.frame.scale**3
+
+    @property
+    def hand_key(self) -> str:
+        """Hash of the hand's canonical geometry (for backend caches)."""
+        return self.hand.geometry_hash
+
+    @cached_property
+    def object_key(self) -> str:
+        """Hash of the object's canonical geometry and samples (for backend caches)."""
+        digest = hashlib.sha256(self.object.hash.encode())
+        digest.update(self._object_to_canonical.tobytes())
+        return digest.hexdigest()
+
+    @property
+    def geometry_key(self) -> str:
+        """Hash of everything a backend sees."""
+        return hashlib.sha256((self.hand_key + self.object_key).encode()).hexdigest()
+
+    # -- files --------------------------------------------------------------------------------
+
+    @classmethod
+    def from_file(cls, path: str | os.PathLike, **overrides: Any) -> Grasp:
+        """Read a grasp JSON file (the shared Barrett data's schema, or one written by `save`).
+
+        Parameters
+        ----------
+        path : path-like
+        **overrides
+            ``repair`` (object repair), ``on_limit`` (``"error"``/``"clip"``),
+            ``surface_samples`` (path or array) override what the file says.
+
+        Returns
+        -------
+        Grasp
+        """
+        path = Path(path)
+        if not path.exists():
+            raise GraspFileError(f"{path}: no such grasp file; check the path.")
+        try:
+            data = json.loads(path.read_text())
+        except json.JSONDecodeError as exc:
+            raise GraspFileError(f"{path}: not valid JSON ({exc}).") from exc
+        if not isinstance(data, dict):
+            raise GraspFileError(f"{path}: expected a JSON object at the top level.")
+        return cls.from_dict(data, base_dir=path.parent, source=str(path), **overrides)
+
+    @classmethod
+    def from_dict(
+        cls, data: dict, base_dir: str | os.PathLike = ".", source: str = "<dict>", **overrides
+    ) -> Grasp:
+        """Build from the parsed JSON (paths resolved against ``base_dir``)."""
+        from exactgrasp.grasp.files import read_hand, read_object
+
+        base_dir = Path(base_dir)
+        for key in ("object", "object_pose_in_hand"):
+            if key not in data:
+                raise GraspFileError(f"{source}: missing required key {key!r}.")
+        obj = read_object(data, base_dir, source, overrides)
+        hand = read_hand(data, base_dir, source, overrides)
+        pose = check_pose(data["object_pose_in_hand"], f"{source}: object_pose_in_hand")
+        return cls(hand, obj, pose, name=data.get("name", Path(source).stem))
+
+    def to_dict(self, base_dir: str | os.PathLike = ".", sidecar_stem: str = "grasp") -> dict:
+        """JSON-serialisable form; meshes not read from files are written beside it.
+
+        Parameters
+        ----------
+        base_dir : path-like
+            Folder the JSON will live in (paths are written relative to it).
+        sidecar_stem : str
+            Stem for mesh files written for in-memory geometry.
+        """
+        from exactgrasp.grasp.files import write_hand, write_object
+
+        base_dir = Path(base_dir)
+        data: dict[str, Any] = {"format": FORMAT, "name": self.name}
+        data.update(write_object(self.object, base_dir, sidecar_stem))
+        data["object_pose_in_hand"] = self.object_pose.tolist()
+        data.update(write_hand(self.hand, base_dir, sidecar_stem))
+        return data
+
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write the grasp as JSON (and sidecar meshes for in-memory geometry).
+
+        Returns
+        -------
+        pathlib.Path
+            The JSON file written.
+        """
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        data = self.to_dict(path.parent, sidecar_stem=path.stem)
+        path.write_text(json.dumps(data, indent=1))
+        return path
+
+    def __repr__(self) -> str:
+        return f"Grasp({self.name!r}, hand={self.hand!r}, object={self.object!r})"

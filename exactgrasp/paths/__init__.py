@@ -1,0 +1,5 @@
+"""Rigid-body paths out of the hand: the sampler, its presets and the one coercion of user input."""
+
+from exactgrasp.paths.sampler import PRESETS, PathSampler, PathTable
+
+__all__ = ["PRESETS", "PathSampler", "PathTable"]
