@@ -1,4 +1,4 @@
-"""Rigid-body paths out of the hand: the sampler, its presets and the one coercion of user input."""
+"""Rigid-body paths out of the hand: the sampler, its presets and the one input coercion."""
 
 from exactgrasp.paths.sampler import PRESETS, PathSampler, PathTable
 

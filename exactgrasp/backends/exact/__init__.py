@@ -1,4 +1,4 @@
-"""The exact backend: certified intersection volumes, the plain boolean reference and the kernel."""
+"""The exact backend: certified intersection volumes, the plain boolean and the kernel."""
 
 from exactgrasp.backends.exact.backend import (
     FLOOR,

@@ -1,4 +1,4 @@
-"""The paper's voxel-count estimator: backend, hand grids, object points and the counting kernel."""
+"""The paper's voxel-count estimator: backend, hand grids, object points and the kernel."""
 
 from exactgrasp.backends.voxel.backend import (
     HandOccupancy,
