@@ -48,6 +48,8 @@ def __getattr__(name: str):
         "compare_backends": ("exactgrasp.compare", "compare_backends"),
         "run_batch": ("exactgrasp.batch", "run_batch"),
         "read_batch": ("exactgrasp.batch", "read_batch"),
+        "intersection_volume": ("exactgrasp.overlap", "intersection_volume"),
+        "show": ("exactgrasp.view", "show"),
     }
     if name in lazy:
         module_name, attr = lazy[name]
@@ -86,6 +88,7 @@ __all__ = [
     "distance",
     "get_backend",
     "hands",
+    "intersection_volume",
     "joint_noise",
     "object_pose_noise",
     "objects",
@@ -93,4 +96,5 @@ __all__ = [
     "read_batch",
     "register_backend",
     "run_batch",
+    "show",
 ]

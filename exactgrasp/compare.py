@@ -13,9 +13,11 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.backends import Backend, get_backend
+from exactgrasp.backends.defaults import COMPARED_BACKENDS
 from exactgrasp.descriptor import compute_volumes
 from exactgrasp.errors import ExactGraspError
 from exactgrasp.grasp import Grasp
+from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
 
 #: Reference values below this fraction of the hand volume count as zero when forming
@@ -103,8 +105,8 @@ def _summary(values: np.ndarray, reference: np.ndarray) -> dict[str, Any]:
 
 def compare_backends(
     grasp: Grasp,
-    sampler: PathSampler | str | None = None,
-    backends: Sequence[str | Backend] = ("voxel", "exact"),
+    sampler: PathSampler | str | dict | None = None,
+    backends: Sequence[str | Backend] = COMPARED_BACKENDS,
     progress: bool | None = None,
 ) -> Comparison:
     """Run several backends on the same poses and compare them pose by pose.
@@ -112,8 +114,8 @@ def compare_backends(
     Parameters
     ----------
     grasp : Grasp
-    sampler : PathSampler or str, optional
-        Default: the ``"balanced"`` preset.
+    sampler : PathSampler or str or dict, optional
+        Anything `exactgrasp.paths.as_sampler` takes; default: the ``"balanced"`` preset.
     backends : sequence of str or Backend
         At least two; the LAST is the reference (e.g. ``("voxel", "exact")``).
     progress : bool, optional
@@ -122,14 +124,12 @@ def compare_backends(
     -------
     Comparison
     """
-    from exactgrasp.descriptor import _sampler
-
     if len(backends) < 2:
         raise ExactGraspError(
             f"compare_backends needs at least two backends, got {list(backends)}; e.g. "
             "backends=('voxel', 'exact')."
         )
-    sampler = _sampler(sampler)
+    sampler = as_sampler(sampler)
     instances = [get_backend(b) for b in backends]
     names = [b.name for b in instances]
     labels = [f"{n}{i}" if names.count(n) > 1 else n for i, n in enumerate(names)]

@@ -13,8 +13,10 @@ import numpy as np
 from scipy.spatial.distance import pdist, squareform
 
 from exactgrasp.backends import Backend, get_backend
+from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.errors import DescriptorError
 from exactgrasp.grasp import Grasp
+from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.progress import progress_bar
 
@@ -98,18 +100,6 @@ class Descriptor:
         return f"Descriptor({self.shape[0]} paths x {self.shape[1]} steps, backend={backend!r})"
 
 
-def _sampler(sampler: PathSampler | str | None) -> PathSampler:
-    if sampler is None:
-        return PathSampler.preset("balanced")
-    if isinstance(sampler, str):
-        return PathSampler.preset(sampler)
-    if not isinstance(sampler, PathSampler):
-        raise DescriptorError(
-            f"sampler must be a PathSampler or a preset name, got {type(sampler).__name__}."
-        )
-    return sampler
-
-
 def compute_volumes(
     grasp: Grasp,
     poses: np.ndarray,
@@ -138,8 +128,8 @@ def compute_volumes(
 
 def compute_descriptor(
     grasp: Grasp,
-    sampler: PathSampler | str | None = None,
-    backend: Backend | str = "voxel",
+    sampler: PathSampler | str | dict | None = None,
+    backend: Backend | str = DEFAULT_BACKEND,
     progress: bool | None = None,
     **backend_params: Any,
 ) -> Descriptor:
@@ -148,8 +138,8 @@ def compute_descriptor(
     Parameters
     ----------
     grasp : Grasp
-    sampler : PathSampler or str, optional
-        Default: the ``"balanced"`` preset.
+    sampler : PathSampler or str or dict, optional
+        Anything `exactgrasp.paths.as_sampler` takes; default: the ``"balanced"`` preset.
     backend : str or Backend
         ``"voxel"`` (default, the paper's estimator) or ``"exact"``.
     progress : bool, optional
@@ -164,7 +154,7 @@ def compute_descriptor(
     """
     from exactgrasp.version import __version__
 
-    sampler = _sampler(sampler)
+    sampler = as_sampler(sampler)
     backend = get_backend(backend, **backend_params)
     start = time.perf_counter()
     volumes = compute_volumes(grasp, sampler.poses(), backend, progress, f"{backend.name} poses")

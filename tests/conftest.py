@@ -10,7 +10,7 @@ import pytest
 
 os.environ.setdefault("EXACTGRASP_NO_PROGRESS", "1")
 
-#: ``../shared/data`` beside the repository, as the brief lays it out.
+#: ``../shared/data`` beside the repository (``EXACTGRASP_DATA`` overrides it).
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 

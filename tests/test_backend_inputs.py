@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import exactgrasp as eg
 from exactgrasp.backends.exact import ExactBackend, ExactIntersector
+from exactgrasp.backends.params import Interval, Options, Param, validate_parameters
 from exactgrasp.backends.voxel import VoxelBackend
 from exactgrasp.errors import BackendError
 from tests.conftest import box_arrays
@@ -96,56 +96,8 @@ def test_object_holding_the_whole_hand_is_computed_not_culled():
 # -- poses must be rigid motions -------------------------------------------------------------
 
 
-@pytest.fixture
-def grasp():
-    hand = eg.Hand.from_meshes(
-        [box_arrays([-0.05, -0.05, 0.0], [0.05, 0.05, 0.02])], frame=eg.HandFrame.identity()
-    )
-    return eg.Grasp(hand, eg.Solid(*box_arrays([0, 0, 0], [0.01, 0.01, 0.01])), name="g")
-
-
-def _not_rigid(kind: str) -> np.ndarray:
-    poses = np.tile(np.eye(4), (4, 1, 1))
-    bad = poses[2]
-    if kind == "reflection":
-        bad[0, 0] = -1.0
-    elif kind == "scale":
-        bad[:3, :3] *= 1.5
-    elif kind == "shear":
-        bad[0, 1] = 0.3
-    elif kind == "last row":
-        bad[3, 0] = 0.2
-    elif kind == "slightly scaled":
-        bad[:3, :3] *= 1.0 + 1e-7
-    return poses
-
-
-NOT_RIGID = {
-    "reflection": "determinant -1 (a reflection)",
-    "scale": "not orthonormal",
-    "shear": "not orthonormal",
-    "last row": "last row is [0.2, 0.0, 0.0, 1.0]",
-    "slightly scaled": "not orthonormal",
-}
-
-
-@pytest.mark.parametrize("backend", ["voxel", "exact"])
-@pytest.mark.parametrize("kind", sorted(NOT_RIGID))
-def test_every_backend_refuses_a_pose_that_is_not_rigid_and_names_it(grasp, backend, kind):
-    params = {"broadphase": None} if backend == "exact" else {"hand_resolution": 20}
-    be = eg.get_backend(backend, **params)
-    with pytest.raises(BackendError) as err:
-        be.volumes(grasp, _not_rigid(kind))
-    message = str(err.value)
-    assert "poses[2] is not a rigid motion" in message
-    assert NOT_RIGID[kind] in message
-
-
-def test_rigid_poses_within_rounding_are_accepted(grasp):
-    poses = np.tile(np.eye(4), (2, 1, 1))
-    poses[1, :3, :3] *= 1.0 + 1e-12
-    for be in (VoxelBackend(hand_resolution=20), ExactBackend(broadphase=None)):
-        assert be.volumes(grasp, poses).shape == (2,)
+# The generic pose checks (every kind of non-rigid pose refused with its index, rigid poses
+# within rounding accepted) run on every backend in tests/test_backend_conformance.py.
 
 
 def test_a_single_pose_is_named_without_an_index():
@@ -159,24 +111,26 @@ def test_a_single_pose_is_named_without_an_index():
 
 # -- options are checked in the constructor --------------------------------------------------
 
+CELL = "must be a positive, finite number or None, got"
 BAD_OPTIONS = [
-    ({"hand_cell": -1}, "hand_cell must be a positive, finite length"),
-    ({"hand_cell": float("nan")}, "hand_cell must be a positive, finite length"),
-    ({"hand_cell": 0}, "hand_cell must be a positive, finite length"),
-    ({"object_cell": "fine"}, "object_cell must be a positive length"),
-    ({"capacity": -5}, "capacity must be a positive integer"),
-    ({"capacity": 2.5}, "capacity must be a positive integer"),
-    ({"n_jobs": 0}, "n_jobs must be a positive integer or -1"),
-    ({"n_jobs": True}, "n_jobs must be a positive integer or -1"),
-    ({"broadphase": "bullet"}, "unknown broadphase 'bullet'"),
-    ({"cell": 0.1}, r"unknown tuning options \['cell'\]"),
+    ({"hand_cell": -1}, f"hand_cell {CELL} -1 .grid cell edge, same units as the meshes"),
+    ({"hand_cell": float("nan")}, f"hand_cell {CELL} nan"),
+    ({"hand_cell": float("inf")}, f"hand_cell {CELL} inf"),
+    ({"hand_cell": 0}, f"hand_cell {CELL} 0"),
+    ({"object_cell": "fine"}, f"object_cell {CELL} 'fine'"),
+    ({"capacity": -5}, "capacity must be a positive integer, got -5 .edge crossings"),
+    ({"capacity": 2.5}, "capacity must be a positive integer, got 2.5"),
+    ({"n_jobs": 0}, "n_jobs must be a positive integer or -1, got 0"),
+    ({"n_jobs": True}, "n_jobs must be a positive integer or -1, got True"),
+    ({"broadphase": "bullet"}, "broadphase must be 'coal', 'fcl' or None, got 'bullet'"),
+    ({"cell": 0.1}, r"unknown parameters \['cell'\]; it takes broadphase, n_jobs, hand_cell"),
 ]
 
 
 @pytest.mark.parametrize(("options", "message"), BAD_OPTIONS)
 def test_exact_options_are_refused_in_both_constructors_with_the_option_named(options, message):
     options = {"broadphase": None, **options}
-    with pytest.raises(BackendError, match=message):
+    with pytest.raises(BackendError, match=f"^ExactBackend: {message}"):
         ExactBackend(**options)
     hand = [box_arrays([0, 0, 0], [1, 1, 1])]
     with pytest.raises(BackendError, match=message):
@@ -195,3 +149,60 @@ def test_explicit_cells_are_used_and_recorded():
     ex = ExactIntersector(hand, obj, broadphase=None, hand_cell=0.25, object_cell=0.125)
     assert ex.tuning["hand_cell"] == 0.25 and ex.tuning["object_cell"] == 0.125
     np.testing.assert_allclose(ex.volumes(np.eye(4)), 0.125, rtol=1e-12)
+
+
+def test_checked_options_become_plain_numbers_in_params():
+    be = ExactBackend(broadphase=None, n_jobs=np.int64(2), capacity=np.int64(10), hand_cell=1)
+    assert be.params == {"broadphase": None, "n_jobs": 2, "capacity": 10, "hand_cell": 1.0}
+    assert [type(v) for v in be.params.values()] == [type(None), int, int, float]
+    assert ExactBackend(broadphase=None, object_cell=None).params == {
+        "broadphase": None,
+        "n_jobs": 1,
+    }
+    voxel = VoxelBackend(hand_resolution=np.int64(20), surface_spacing=np.float32(2))
+    assert type(voxel.params["hand_resolution"]) is int
+    assert type(voxel.params["surface_spacing"]) is float
+
+
+# -- the declared-constraints helper ---------------------------------------------------------
+
+TABLE = {
+    "count": Param(None, Interval(int, 1, 10_000_000), Options(("auto",)), hint="how many"),
+    "fraction": Param(Interval(float, 0, 1, closed="left")),
+    "flag": Param("boolean"),
+    "hook": Param(callable, None),
+    "name": Param(str),
+}
+
+
+@pytest.mark.parametrize(
+    ("params", "message"),
+    [
+        (
+            {"count": 0},
+            "count must be None, an integer from 1 to 10,000,000 or 'auto', got 0 .how",
+        ),
+        ({"count": True}, "count must be None, .* got True"),
+        ({"count": "AUTO"}, "count must be None, .* got 'AUTO'"),
+        ({"fraction": 1}, r"fraction must be a number in \[0, 1\), got 1\.$"),
+        ({"fraction": float("nan")}, "fraction must be .* got nan"),
+        ({"flag": 1}, "flag must be True or False, got 1"),
+        ({"hook": 3}, "hook must be a callable or None, got 3"),
+        ({"name": b"x"}, "name must be a str, got b'x'"),
+        ({"size": 3}, r"unknown parameters \['size'\]; it takes count, fraction, flag, hook"),
+    ],
+)
+def test_validate_parameters_names_owner_parameter_value_and_what_is_allowed(params, message):
+    with pytest.raises(BackendError, match=f"^Toy: {message}"):
+        validate_parameters(TABLE, params, "Toy")
+
+
+def test_validate_parameters_returns_plain_values():
+    out = validate_parameters(
+        TABLE,
+        {"count": np.int32(3), "fraction": 0, "flag": np.bool_(True), "hook": None, "name": "a"},
+        "Toy",
+    )
+    assert out == {"count": 3, "fraction": 0.0, "flag": True, "hook": None, "name": "a"}
+    assert [type(v) for v in out.values()] == [int, float, bool, type(None), str]
+    assert validate_parameters(TABLE, {"count": "auto"}, "Toy") == {"count": "auto"}

@@ -1,5 +1,5 @@
-"""`exactgrasp batch` (issue 6): a 2-worker local cluster, a run killed and resumed, bad rows,
-the same bytes for 1 and 2 workers, and manifest errors caught before any work.
+"""`exactgrasp batch`: a 2-worker local cluster, a run killed and resumed, bad rows, the same
+bytes for 1 and 2 workers, and manifest errors caught before any work.
 
 Small on purpose (CI has 2 cores): 19 paths x 3 steps, coarse voxel grids, 7 good grasps of the
 built-in hand and 4 bad rows, parts of 2 rows.
@@ -160,7 +160,7 @@ def test_killed_run_resumes_without_recomputing(manifest, run_one, tmp_path):
     ]
     command += _cli_args(manifest, out, workers=1)
     env = {**os.environ, "EXACTGRASP_NO_PROGRESS": "1"}
-    # Its own session, so the kill takes the local cluster's worker processes with it.
+    # A new process group (start_new_session), so the kill takes the cluster's workers with it.
     process = subprocess.Popen(command, env=env, start_new_session=True)
     deadline = time.monotonic() + 120
     try:

@@ -1,46 +1,84 @@
+"""The ``exactgrasp`` command: each sub-command against the library call it wraps, the shared
+options (``--sampler``/``--steps``, ``--param``, ``--units``/``--repair``), their errors, and
+docs/cli.md covering every command and flag."""
+
+from __future__ import annotations
+
+import argparse
 import json
+import re
 import subprocess
 import sys
+from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 import pytest
 
 import exactgrasp as eg
-from exactgrasp.cli import main
+from exactgrasp.backends import registry
+from exactgrasp.backends.params import Interval, Options, Param
+from exactgrasp.backends.registry import backend_class
+from exactgrasp.cli import build_parser, main
+from exactgrasp.cli.common import sampler_from_args
+from exactgrasp.cli.params import backend_names, split_params
+from exactgrasp.geometry.files import write_ply
 from tests.conftest import box_arrays
+
+ROOT = Path(__file__).resolve().parents[1]
+#: A sampler of 5 paths, so that every run here is quick.
+TINY = '{"n_translations": 2, "n_axes": 1, "n_amounts": 1}'
+COARSE = ["--param", "object_resolution=12", "--param", "hand_resolution=24"]
+SAMPLER_COMMANDS = ("demo", "descriptor", "compare", "show", "batch")
+BACKEND_COMMANDS = ("demo", "descriptor", "compare", "batch")
+GRASP_FILE_COMMANDS = ("descriptor", "compare", "close", "show")
+
+
+def _slab_hand() -> eg.Hand:
+    return eg.Hand.from_meshes(
+        [box_arrays([-0.05, -0.05, 0.0], [0.05, 0.05, 0.02])],
+        frame=eg.HandFrame.from_palm([0, 0, 0.02], [0, 0, 1], [0, 1, 0], 0.08),
+    )
 
 
 @pytest.fixture
 def grasp_file(tmp_path):
-    hand = eg.Hand.from_meshes(
-        [box_arrays([-0.05, -0.05, 0.0], [0.05, 0.05, 0.02])],
-        frame=eg.HandFrame.from_palm([0, 0, 0.02], [0, 0, 1], [0, 1, 0], 0.08),
-    )
     obj = eg.Solid(*box_arrays([-0.02, -0.02, -0.02], [0.02, 0.02, 0.02]))
     pose = np.eye(4)
     pose[:3, 3] = [0, 0, 0.03]  # overlaps the palm slab by 1 cm
-    return eg.Grasp(hand, obj, pose, name="slab").save(tmp_path / "slab.json")
+    return eg.Grasp(_slab_hand(), obj, pose, name="slab").save(tmp_path / "slab.json")
+
+
+def _subparsers() -> dict[str, argparse.ArgumentParser]:
+    parser = build_parser()
+    # argparse has no public way to list sub-parsers.
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return dict(action.choices)
+
+
+def _flags(parser: argparse.ArgumentParser) -> list[str]:
+    return [s for a in parser._actions for s in a.option_strings if s not in ("-h", "--help")]
+
+
+def _help(command: str) -> str:
+    return _subparsers()[command].format_help()
+
+
+def _error(capsys, argv) -> str:
+    """Run a command that must fail on its input: status 2, a message, no traceback."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"exactgrasp {argv[0]}: error:") and "Traceback" not in err, err
+    return err
+
+
+# -- descriptor and compare against the library ------------------------------------------------
 
 
 def test_descriptor_and_compare_commands(grasp_file, tmp_path, capsys):
     out_a = tmp_path / "a.npz"
-    assert (
-        main(
-            [
-                "descriptor",
-                str(grasp_file),
-                "--backend",
-                "voxel",
-                "-o",
-                str(out_a),
-                "--steps",
-                "3",
-                "--param",
-                "object_resolution=20",
-            ]
-        )
-        == 0
-    )
+    argv = ["descriptor", str(grasp_file), "--backend", "voxel", "-o", str(out_a)]
+    assert main([*argv, "--steps", "3", "--param", "object_resolution=20"]) == 0
     d = eg.Descriptor.load(out_a)
     assert d.shape == (474, 3)
     assert d.metadata["backend_params"]["object_resolution"] == 20
@@ -63,37 +101,22 @@ def test_descriptor_and_compare_commands(grasp_file, tmp_path, capsys):
 
 def test_compare_backends_command(grasp_file, tmp_path, capsys):
     table = tmp_path / "poses.csv"
-    assert (
-        main(
-            [
-                "compare",
-                str(grasp_file),
-                "--backends",
-                "voxel,voxel",
-                "--steps",
-                "2",
-                "-o",
-                str(table),
-            ]
-        )
-        == 0
-    )
+    argv = ["compare", str(grasp_file), "--backends", "voxel,voxel", "--steps", "2"]
+    assert main([*argv, "-o", str(table), *COARSE]) == 0
     text = capsys.readouterr().out
     assert "reference backend: voxel1" in text
     assert len(table.read_text().splitlines()) == 474 * 2 + 1
 
 
-def test_errors_are_reported_not_raised(tmp_path, capsys):
-    assert main(["descriptor", str(tmp_path / "missing.json"), "-o", str(tmp_path / "x.npz")]) == 2
-    assert "no such grasp file" in capsys.readouterr().err
+def test_errors_are_reported_not_raised(grasp_file, tmp_path, capsys):
+    err = _error(capsys, ["descriptor", str(tmp_path / "missing.json"), "-o", "x.npz"])
+    assert "no such grasp file" in err
     bad = tmp_path / "bad.json"
-    bad.write_text(
-        json.dumps({"object": "nothing.stl", "object_pose_in_hand": np.eye(4).tolist()})
-    )
-    assert main(["descriptor", str(bad), "-o", str(tmp_path / "x.npz")]) == 2
-    assert "does not exist" in capsys.readouterr().err
-    assert main(["compare", str(tmp_path / "a.txt")]) == 2
-    assert "compare takes either" in capsys.readouterr().err
+    bad.write_text(json.dumps({**json.loads(grasp_file.read_text()), "object": "nothing.stl"}))
+    assert "does not exist" in _error(capsys, ["descriptor", str(bad), "-o", "x.npz"])
+    assert "compare takes either" in _error(capsys, ["compare", str(tmp_path / "a.txt")])
+    err = _error(capsys, ["compare", str(tmp_path / "a.npz"), "--param", "seed=1"])
+    assert "--param" in err
 
 
 def test_demo_quick(tmp_path, capsys):
@@ -102,7 +125,7 @@ def test_demo_quick(tmp_path, capsys):
     summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
     backends = {row["backend"] for row in summary}
     assert backends == eg.available_backends()
-    assert {row["grasp"] for row in summary} == {"can", "box", "jug handle"}
+    assert {"can", "box", "jug handle"} <= {row["grasp"] for row in summary}
     png = (tmp_path / "demo" / "descriptors.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
     assert "seconds" in out
@@ -113,5 +136,333 @@ def test_console_script_help():
         [sys.executable, "-m", "exactgrasp.cli", "--help"], capture_output=True, text=True
     )
     assert result.returncode == 0
-    for command in ("demo", "descriptor", "compare"):
+    for command in ("demo", "descriptor", "compare", "close"):
         assert command in result.stdout
+
+
+# -- --sampler and --steps ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("command", SAMPLER_COMMANDS)
+def test_sampler_and_steps_are_the_same_option_everywhere(command):
+    parsers = _subparsers()
+    reference = {a.dest: a.help for a in parsers["descriptor"]._actions}
+    actions = {a.dest: a for a in parsers[command]._actions}
+    for dest in ("sampler", "steps"):
+        assert actions[dest].help == reference[dest], (command, dest)
+    positional = {
+        "demo": [],
+        "descriptor": ["g.json", "-o", "x.npz"],
+        "compare": ["g.json"],
+        "show": ["g.json"],
+        "batch": ["m.jsonl", "--out", "o"],
+    }[command]
+    args = build_parser().parse_args([command, *positional, "--sampler", TINY, "--steps", "2"])
+    assert sampler_from_args(args).params == eg.PathSampler(2, 1, 1, n_steps=2).params
+    args = build_parser().parse_args([command, *positional, "--sampler", "rotations"])
+    assert sampler_from_args(args).params == eg.PathSampler.preset("rotations").params
+
+
+def test_sampler_from_a_json_file(grasp_file, tmp_path):
+    spec = tmp_path / "sampler.json"
+    spec.write_text(TINY)
+    out = tmp_path / "d.npz"
+    argv = ["descriptor", str(grasp_file), "-o", str(out), "--sampler", str(spec)]
+    assert main([*argv, "--steps", "2", *COARSE]) == 0
+    assert eg.Descriptor.load(out).shape == (5, 2)
+
+
+@pytest.mark.parametrize(
+    ("flags", "named"),
+    [
+        (["--sampler", "sideways"], r"--sampler 'sideways': not a preset"),
+        (["--sampler", "{not json"], r"--sampler '\{not json': not valid JSON"),
+        (["--sampler", "[1, 2]"], r"--sampler '\[1, 2\]': not a preset"),
+        (["--sampler", '{"n_paths": 3}'], r"unknown parameter\(s\) n_paths; a sampler takes"),
+        (["--sampler", '{"n_axes": 0}'], r"--sampler .*n_axes must be a positive integer"),
+        (["--steps", "0"], r"--steps must be a positive number"),
+    ],
+)
+def test_sampler_errors_name_the_flag(grasp_file, capsys, flags, named):
+    err = _error(capsys, ["descriptor", str(grasp_file), "-o", "x.npz", *flags])
+    assert re.search(named, err), err
+    assert "n_steps=" not in err and "PathSampler instance" not in err
+
+
+# -- --param -----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("command", BACKEND_COMMANDS)
+def test_help_lists_every_declared_parameter(command):
+    text = _help(command)
+    assert "--param KEY=VALUE" in text
+    for name in backend_names():
+        constraints = backend_class(name).parameter_constraints
+        assert f"  {name}:" in text
+        for key in constraints:
+            assert re.search(rf"^\s+{key}\s", text, re.M), (command, name, key)
+    assert "an integer from 2 to 1000; default 50" in text  # voxel's object_resolution
+
+
+class TwoKnobs(eg.Backend):
+    """A backend the command line has never heard of, with declared parameters."""
+
+    name = "two_knobs"
+    parameter_constraints: ClassVar[dict[str, Param]] = {
+        "gain": Param(Interval(float, 0, 10), hint="volume multiplier"),
+        "mode": Param(Options(("fast", "slow"))),
+    }
+
+    def __init__(self, gain: float = 1.0, mode: str = "fast"):
+        self.gain, self.mode = gain, mode
+
+    @property
+    def params(self):
+        return {"gain": self.gain, "mode": self.mode}
+
+    def volumes(self, grasp, poses):
+        poses = eg.backends.check_poses(poses)
+        return self.gain * np.abs(poses[..., 0, 3])
+
+
+@pytest.fixture
+def two_knobs():
+    eg.register_backend("two_knobs", TwoKnobs)
+    yield
+    registry.unregister_backend("two_knobs")
+
+
+def test_a_new_backend_parameter_shows_up_without_touching_the_cli(
+    two_knobs, grasp_file, tmp_path, capsys
+):
+    text = _help("descriptor")
+    assert re.search(r"two_knobs:\n\s+gain\s+a number from 0 to 10; default 1.0; volume", text)
+    assert re.search(r"mode\s+'fast' or 'slow'; default fast", text)
+    out = tmp_path / "k.npz"
+    argv = ["descriptor", str(grasp_file), "-o", str(out), "--backend", "two_knobs"]
+    assert main([*argv, "--sampler", TINY, "--param", "gain=2.5", "--param", "mode=slow"]) == 0
+    assert eg.Descriptor.load(out).metadata["backend_params"] == {"gain": 2.5, "mode": "slow"}
+    err = _error(capsys, [*argv, "--param", "gain=11"])
+    assert "--param gain=11: two_knobs's gain must be a number from 0 to 10, got 11" in err
+
+
+@pytest.mark.parametrize(
+    ("items", "named"),
+    [
+        (["fov=3"], r"--param fov: unknown key; voxel takes hand_resolution, object_resolution"),
+        (["object_resolution=abc"], r"--param object_resolution=abc: voxel's object_resolution "),
+        (["object_resolution=1"], r"must be an integer from 2 to 1000, got 1 \(voxels along"),
+        (["grid=square"], r"--param grid=square: voxel's grid must be 'floor' or 'round'"),
+        (["object_resolution"], r"--param 'object_resolution': expected KEY=VALUE"),
+        (["exact.n_jobs=2"], r"--param exact.n_jobs=2: this command runs voxel, not 'exact'"),
+        (["voxel.fov=3"], r"--param fov: unknown key; voxel takes hand_resolution"),
+        (
+            ["surface_samples=100", "surface_spacing=1"],
+            r"--param: VoxelBackend: give either surface_samples",
+        ),
+    ],
+)
+def test_param_errors_name_the_key_and_the_allowed_keys(grasp_file, capsys, items, named):
+    argv = ["descriptor", str(grasp_file), "-o", "x.npz", "--sampler", TINY]
+    err = _error(capsys, [*argv, *(f for item in items for f in ("--param", item))])
+    assert re.search(named, err), err
+
+
+def test_param_errors_in_batch_stop_before_any_work(tmp_path, capsys):
+    manifest = tmp_path / "m.jsonl"
+    manifest.write_text('{"id": 1, "grasp": "g.json"}\n')
+    argv = ["batch", str(manifest), "--out", str(tmp_path / "out"), "--param", "fov=1"]
+    assert "--param fov: unknown key; voxel takes" in _error(capsys, argv)
+    assert not (tmp_path / "out").exists()
+    argv = ["batch", str(manifest), "--out", str(tmp_path / "out"), "--backend", "nope"]
+    assert "--backend nope: unknown backend 'nope'" in _error(capsys, argv)
+
+
+def test_params_go_to_the_backends_that_take_them():
+    items = ["object_resolution=20", "exact.n_jobs=2", "voxel.grid=round", "broadphase=None"]
+    assert split_params(items, ["voxel", "exact"]) == {
+        "voxel": {"object_resolution": 20, "grid": "round"},
+        "exact": {"n_jobs": 2, "broadphase": None},
+    }
+    assert split_params(["surface-samples=none"], ["voxel"]) == {
+        "voxel": {"surface_samples": "none"}
+    }
+    with pytest.raises(eg.ExactGraspError, match=r"--param fov: unknown key; voxel takes .*; "):
+        split_params(["fov=1"], ["voxel", "exact"])
+    with pytest.raises(eg.ExactGraspError, match=r"--backends nope: unknown backend 'nope'"):
+        split_params([], ["voxel", "nope"], flag="--backends")
+
+
+def test_compare_routes_params_per_backend(grasp_file, tmp_path):
+    table = tmp_path / "poses.csv"
+    argv = ["compare", str(grasp_file), "--backends", "voxel,exact", "--sampler", TINY]
+    params = ["--param", "voxel.object_resolution=12", "--param", "hand_resolution=24"]
+    assert main([*argv, "--steps", "2", *params, "--param", "n_jobs=1", "-o", str(table)]) == 0
+    rows = table.read_text().splitlines()
+    column = rows[0].split(",").index("value_voxel")
+    voxel = [float(row.split(",")[column]) for row in rows[1:]]
+    api = eg.compute_descriptor(
+        eg.Grasp.from_file(grasp_file),
+        eg.PathSampler(2, 1, 1, n_steps=2),
+        object_resolution=12,
+        hand_resolution=24,
+    )
+    np.testing.assert_allclose(voxel, api.values.ravel(), rtol=1e-12)
+
+
+# -- --units and --repair ----------------------------------------------------------------------
+
+
+def _grasp_with_mesh(tmp_path, name, vertices, faces, units):
+    """A grasp file of the slab hand whose object is the mesh file ``<name>.ply``."""
+    base = eg.Grasp(_slab_hand(), eg.Solid(*box_arrays([0, 0, 0], [0.01, 0.01, 0.01])))
+    data = base.to_dict(tmp_path, sidecar_stem=name)
+    write_ply(tmp_path / f"{name}.ply", vertices, faces)
+    pose = np.eye(4)
+    pose[:3, 3] = [0, 0, 0.03]
+    data.update(object=f"{name}.ply", object_units=units, object_pose_in_hand=pose.tolist())
+    data["name"] = name
+    path = tmp_path / f"{name}.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.mark.parametrize("command", GRASP_FILE_COMMANDS)
+def test_every_grasp_file_command_has_units_and_repair(command):
+    flags = _flags(_subparsers()[command])
+    for flag in ("--units", "--repair", "--no-repair", "--on-limit"):
+        assert flag in flags, (command, flag)
+
+
+def test_units_override_the_grasp_file(tmp_path, capsys):
+    vertices, faces = box_arrays([-20, -20, -20], [20, 20, 20])  # a 4 cm cube written in mm
+    wrong = _grasp_with_mesh(tmp_path, "cube_mm", vertices, faces, units="m")
+    argv = ["descriptor", str(wrong), "--sampler", TINY, "--steps", "2", *COARSE]
+    err = _error(capsys, [*argv, "-o", str(tmp_path / "x.npz")])
+    assert "pass --units mm" in err and "units='mm'" not in err
+    out = tmp_path / "cube.npz"
+    assert main([*argv, "-o", str(out), "--units", "mm"]) == 0
+    right = _grasp_with_mesh(tmp_path, "cube_mm_ok", vertices, faces, units="mm")
+    api = eg.compute_descriptor(
+        eg.Grasp.from_file(right),
+        eg.PathSampler(2, 1, 1, n_steps=2),
+        object_resolution=12,
+        hand_resolution=24,
+    )
+    np.testing.assert_array_equal(eg.Descriptor.load(out).values, api.values)
+    assert (
+        "invalid choice: 'km'"
+        in subprocess.run(
+            [sys.executable, "-m", "exactgrasp.cli", *argv, "-o", "x.npz", "--units", "km"],
+            capture_output=True,
+            text=True,
+        ).stderr
+    )
+
+
+def test_repair_overrides_the_grasp_file(tmp_path, capsys):
+    pytest.importorskip("pymeshfix", reason="object repair needs the repair extra (pymeshfix)")
+    vertices, faces = box_arrays([-0.02, -0.02, -0.02], [0.02, 0.02, 0.02])
+    holed = _grasp_with_mesh(tmp_path, "holed", vertices, faces[:-1], units="m")
+    argv = ["descriptor", str(holed), "--sampler", TINY, "--steps", "2", *COARSE]
+    err = _error(capsys, [*argv, "-o", str(tmp_path / "x.npz")])
+    assert "not a closed surface" in err and "pass --repair" in err
+    assert main([*argv, "-o", str(tmp_path / "r.npz"), "--repair"]) == 0
+    assert eg.Descriptor.load(tmp_path / "r.npz").values.max() > 0
+
+
+# -- close -------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def barrett_box_file(tmp_path):
+    pytest.importorskip("mujoco", reason="the built-in Barrett hand needs mujoco")
+    pytest.importorskip("coal", reason="closing's default engine (coal) is not installed")
+    pose = np.eye(4)
+    pose[:3, 3] = [0.0, 0.0, 0.0914 + 0.055]  # 5 mm above the open knuckles' tops
+    grasp = eg.Grasp(eg.hands.barrett(), eg.objects.box((0.1, 0.06, 0.1)), pose, name="box")
+    return grasp.save(tmp_path / "box.json")
+
+
+def test_close_command_writes_the_closed_grasp(barrett_box_file, tmp_path, capsys):
+    out = tmp_path / "closed.json"
+    assert main(["close", str(barrett_box_file), "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "box: 3 of 3 fingers touch the object (coal)" in text
+    closed = eg.Grasp.from_file(out)
+    api = eg.close_fingers(
+        eg.Grasp.from_file(barrett_box_file).hand,
+        closed.object,
+        closed.object_pose,
+        full_output=True,
+    )
+    for finger, result in enumerate(api.fingers, start=1):
+        med, dist = result.joints
+        assert closed.hand.joints[med] == pytest.approx(api.hand.joints[med], abs=1e-12)
+        row = re.search(rf"^{finger}\s+{med}\s+([0-9.]+)\s+upper 2.4400\s+(\S+)", text, re.M)
+        assert row and float(row[1]) == pytest.approx(api.hand.joints[med], abs=1e-4)
+        assert row[2] == result.contact_links[0] == f"finger_{finger}_dist"
+        assert re.search(rf"^\s+{dist}\s+[0-9.]+\s+upper 0.8370$", text, re.M)
+    assert f"-> {out}" in text
+
+
+def test_close_command_options(barrett_box_file, tmp_path, capsys):
+    pytest.importorskip("fcl", reason="python-fcl is not installed")
+    out = tmp_path / "one.json"
+    argv = ["close", str(barrett_box_file), "-o", str(out), "--engine", "fcl"]
+    assert main([*argv, "--joints", "finger_1_med_joint,finger_1_dist_joint"]) == 0
+    text = capsys.readouterr().out
+    assert "box: 1 of 1 fingers touch the object (fcl)" in text
+    joints = eg.Grasp.from_file(out).hand.joints
+    assert joints["finger_1_med_joint"] > 0.5 and joints["finger_2_med_joint"] == 0.0
+    err = _error(capsys, [*argv, "--joints", "finger_1_med_joint,thumb"])
+    assert "grasp 'box': unknown joint name 'thumb'" in err
+    one = ["--joints", "finger_1_med_joint", "--direction", "finger_1_med_joint=-"]
+    assert main([*argv, *one]) == 0
+    out_text = capsys.readouterr().out
+    assert re.search(
+        r"^1\s+finger_1_med_joint\s+[0-9.]+\s+lower 0.0000\s+finger_1_med ", out_text, re.M
+    )
+    err = _error(capsys, [*argv, "--direction", "finger_1_med_joint=up"])
+    assert "--direction 'finger_1_med_joint=up': expected JOINT=+" in err
+    err = _error(capsys, [*argv, "--tolerance", "0"])
+    assert "--tolerance must be a positive number (m), got 0.0" in err
+    # --units mm reads the box's mesh as millimetres (0.1 mm wide) and the file says so.
+    assert main([*argv, "--units", "mm"]) == 0
+    assert json.loads(out.read_text())["object_units"] == "mm"
+    assert "box: 1 of 3 fingers touch the object (fcl)" in capsys.readouterr().out
+
+
+def test_close_command_backs_off_a_penetrating_object(tmp_path, capsys):
+    pytest.importorskip("mujoco", reason="the built-in Barrett hand needs mujoco")
+    pytest.importorskip("coal", reason="closing's default engine (coal) is not installed")
+    pose = np.eye(4)
+    pose[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]
+    pose[:3, 3] = [0.0, 0.0, 0.08 + 0.035 - 0.004]  # a can 4 mm into the palm
+    grasp = eg.Grasp(eg.hands.barrett(), eg.objects.cylinder(), pose, name="sunk")
+    argv = ["close", str(grasp.save(tmp_path / "sunk.json")), "-o", str(tmp_path / "c.json")]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert re.search(r"\(coal; the object moved 11\.4\d\d mm out along the palm", captured.out)
+    assert "full_output" not in captured.err
+    closed = eg.Grasp.from_file(tmp_path / "c.json")
+    assert closed.object_pose[2, 3] == pytest.approx(pose[2, 3] + 0.01144, abs=1e-4)
+    err = _error(capsys, [*argv, "--no-backoff"])
+    assert "penetrates" in err and "leave out --no-backoff" in err and "backoff=" not in err
+
+
+# -- docs/cli.md -------------------------------------------------------------------------------
+
+
+def _sections(text: str) -> dict[str, str]:
+    parts = re.split(r"^## `exactgrasp (\w+)`$", text, flags=re.M)
+    return dict(zip(parts[1::2], parts[2::2], strict=True))
+
+
+def test_docs_cover_every_command_and_flag():
+    sections = _sections((ROOT / "docs" / "cli.md").read_text())
+    for name, parser in _subparsers().items():
+        assert name in sections, f"docs/cli.md has no section '## `exactgrasp {name}`'"
+        missing = [f for f in _flags(parser) if f"`{f}" not in sections[name]]
+        assert not missing, f"docs/cli.md, exactgrasp {name}: flags not described {missing}"
+        assert f"exactgrasp {name}" in sections[name], f"no example of exactgrasp {name}"

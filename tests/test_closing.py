@@ -233,7 +233,7 @@ def test_bad_hand_object_and_pose(cylinder_grasp):
 
 def test_no_palm_needs_explicit_joints(cylinder_grasp):
     from exactgrasp.hands.barrett import BARRETT_MJCF
-    from exactgrasp.hands.model import load_model
+    from exactgrasp.hands.loading import load_model
 
     _, obj, pose = cylinder_grasp
     model = load_model("no_palm.xml", xml=BARRETT_MJCF, palm=False)
@@ -255,7 +255,7 @@ def test_object_wholly_inside_the_palm_is_found():
 
 def test_model_closing_joints_attribute_is_the_default(cylinder_grasp):
     from exactgrasp.hands.barrett import BARRETT_MJCF, BARRETT_PALM
-    from exactgrasp.hands.model import load_model
+    from exactgrasp.hands.loading import load_model
 
     _, obj, pose = cylinder_grasp
     model = load_model("two_fingers.xml", xml=BARRETT_MJCF, palm=BARRETT_PALM)
@@ -263,3 +263,111 @@ def test_model_closing_joints_attribute_is_the_default(cylinder_grasp):
     result = close_fingers(eg.Hand(model), obj, pose, full_output=True)
     assert [f.joints for f in result.fingers] == [("finger_1_med_joint",), ("finger_3_med_joint",)]
     assert result.hand.joints["finger_2_med_joint"] == 0.0
+
+
+# -- closing directions ------------------------------------------------------------------------
+
+
+def test_parallel_gripper_closes_towards_its_lower_limit():
+    # A 5 cm box between the open jaws (0.08 m): they shut onto it, nothing backs off.
+    hand, width = eg.hands.parallel_gripper(), 0.05
+    assert hand.joints == {"finger_1_joint": 0.04}  # open by default
+    box = eg.objects.box((0.03, width, 0.04))
+    pose = np.eye(4)
+    pose[2, 3] = 0.025
+    result = close_fingers(hand, box, pose, full_output=True)
+    assert result.backoff_distance == 0.0
+    np.testing.assert_array_equal(result.object_pose, pose)
+    assert result.directions == {"finger_1_joint": -1}
+    assert result.fingers[0].inferred == (True,)
+    assert set(result.fingers[0].contact_links) == {"finger_1", "finger_2"}
+    gap = 2 * result.hand.joints["finger_1_joint"]  # the second jaw mirrors the first
+    assert 0.0 < gap - width <= 2 * TOL
+    _check_contact_grasp(result, box)
+    assert "finger_1_joint - (inferred)" in repr(result) and "back-off 0 mm" in result.summary()
+    # Closing towards the upper limit (the old fixed rule) starts shut inside the box: the
+    # object is backed off out of the jaws, and the jaws touch it only with their tips.
+    with pytest.warns(UserWarning, match="penetrates box"):
+        wrong = close_fingers(hand, box, pose, direction={"finger_1_joint": +1}, full_output=True)
+    assert wrong.backoff_distance > 0.04 and wrong.hand.joints["finger_1_joint"] == 0.0
+
+
+MIXED = """<mujoco model="mixed">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="palm">
+      <geom name="palm" type="box" pos="0 0 -0.01" size="0.03 0.06 0.01"/>
+      <site name="face"/>
+      <body name="a" pos="0 0.05 0">
+        <joint name="a_joint" axis="1 0 0" range="0 2.6"/>
+        <geom name="a" type="capsule" fromto="0 0 0.005 0 0.05 0.005" size="0.005"/>
+      </body>
+      <body name="b" pos="0 -0.05 0">
+        <joint name="b_joint" axis="1 0 0" range="-2.6 0"/>
+        <geom name="b" type="capsule" fromto="0 0 0.005 0 -0.05 0.005" size="0.005"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>"""
+
+
+@pytest.fixture(scope="module")
+def mixed_grasp():
+    """Two fingers on one axis: ``a`` curls inwards (over the palm) with + values, ``b`` with
+    - values; a box above the palm between them."""
+    from exactgrasp.hands.loading import load_model
+
+    palm = {"site": "face", "normal": "+z", "up": "+y", "depth": 0.06}
+    model = load_model("mixed.xml", xml=MIXED, palm=palm)
+    pose = np.eye(4)
+    pose[2, 3] = 0.04
+    return eg.Hand(model), eg.objects.box((0.02, 0.06, 0.04)), pose
+
+
+def test_mixed_directions_inferred(mixed_grasp):
+    hand, box, pose = mixed_grasp
+    assert eg.grasp.closing.closing_directions(hand) == {"a_joint": 1, "b_joint": -1}
+    result = close_fingers(hand, box, pose, full_output=True)
+    assert result.directions == {"a_joint": 1, "b_joint": -1}
+    assert all(f.inferred == (True,) for f in result.fingers)
+    assert [f.contact_links for f in result.fingers] == [("a",), ("b",)]
+    assert 0 < result.hand.joints["a_joint"] < 2.6
+    assert -2.6 < result.hand.joints["b_joint"] < 0
+    _check_contact_grasp(result, box)
+
+
+def test_mixed_directions_given(mixed_grasp):
+    hand, box, pose = mixed_grasp
+    inferred = close_fingers(hand, box, pose)
+    given = close_fingers(
+        hand, box, pose, direction={"a_joint": 1, "b_joint": -1}, full_output=True
+    )
+    assert given.hand.joints == inferred.joints
+    assert all(f.inferred == (False,) for f in given.fingers)
+
+
+def test_model_closing_directions_attribute(mixed_grasp):
+    from exactgrasp.hands.loading import load_model
+
+    _, box, pose = mixed_grasp
+    palm = {"site": "face", "normal": "+z", "up": "+y", "depth": 0.06}
+    model = load_model("mixed_preset.xml", xml=MIXED, palm=palm)
+    model.closing_directions = {"b_joint": -1}
+    result = close_fingers(eg.Hand(model), box, pose, full_output=True)
+    assert [f.inferred for f in result.fingers] == [(True,), (False,)]
+
+
+@pytest.mark.parametrize(
+    "direction, message",
+    [
+        ({"finger_2_prox_joint": 1}, "follows 'finger_1_prox_joint'"),
+        ({"finger_1_prox_joint": 1}, "not a closing joint"),
+        ({"finger_1_med_joint": 2}, r"must be \+1 or -1"),
+        ({"finger_1_med_joint": True}, r"must be \+1 or -1"),
+        ([1, -1], "must be a dict"),
+    ],
+)
+def test_bad_directions(cylinder_grasp, direction, message):
+    hand, obj, pose = cylinder_grasp
+    with pytest.raises(JointError, match=message):
+        close_fingers(hand, obj, pose, direction=direction)

@@ -37,7 +37,7 @@ def grasp():
 def _shift_backend():
     eg.register_backend("shift", ShiftBackend)
     yield
-    registry._REGISTERED.pop("shift", None)
+    registry.unregister_backend("shift")
 
 
 def test_descriptor_values_are_volume_over_hand_volume(grasp):
@@ -101,7 +101,7 @@ def test_nan_volumes_from_a_backend_are_an_error(grasp):
         eg.compute_descriptor(grasp, eg.PathSampler(2, 1, 2, n_steps=3), backend=NanBackend())
 
 
-def test_registry_errors(monkeypatch):
+def test_registry_errors():
     with pytest.raises(eg.BackendError, match="unknown backend 'nope'; available:"):
         eg.get_backend("nope")
     with pytest.raises(eg.BackendError, match="bad parameters"):
@@ -110,13 +110,42 @@ def test_registry_errors(monkeypatch):
         eg.get_backend(ShiftBackend(), scale=2)
     with pytest.raises(eg.BackendError, match="not a Backend subclass"):
         eg.register_backend("x", dict)
-    monkeypatch.setitem(registry._NEEDS, "shift2", [("no_such_module_xyz", "xyz-pkg", "exact")])
-    monkeypatch.setitem(registry._BUILTIN, "shift2", "tests.test_descriptor:ShiftBackend")
-    with pytest.raises(
-        eg.MissingDependencyError, match=r"pip install xyz-pkg.*exactgrasp\[exact\]"
-    ):
-        eg.get_backend("shift2")
-    assert "shift2" not in eg.available_backends()
+    with pytest.raises(eg.BackendError, match="not a 'module:Class' path"):
+        eg.register_backend("x", "tests.test_descriptor")
+    eg.register_backend(
+        "shift2",
+        "tests.test_descriptor:ShiftBackend",
+        requires=[("no_such_module_xyz", "xyz-pkg", "exact")],
+    )
+    try:
+        with pytest.raises(
+            eg.MissingDependencyError, match=r"pip install xyz-pkg.*exactgrasp\[exact\]"
+        ):
+            eg.get_backend("shift2")
+        assert "shift2" not in eg.available_backends()
+    finally:
+        registry.unregister_backend("shift2")
+    assert "shift2" not in registry.registry.BACKENDS
+
+
+def test_register_by_path_then_unregister_restores_the_builtin():
+    eg.register_backend("voxel", "tests.test_descriptor:ShiftBackend")
+    try:
+        assert eg.get_backend("voxel").name == "shift"
+    finally:
+        registry.unregister_backend("voxel")
+    assert eg.get_backend("voxel").name == "voxel"
+    assert registry.registry.BACKENDS["voxel"] == registry.registry.BUILTIN_BACKENDS["voxel"]
+
+
+def test_shared_backend_is_one_instance_per_name_and_parameters():
+    first = registry.shared_backend("shift", scale=2.0)
+    assert registry.shared_backend("shift", scale=2.0) is first
+    assert registry.shared_backend("shift", scale=3.0) is not first
+    assert registry.shared_backend(first) is first
+    # Registering a backend again drops the shared instances built from the old one.
+    eg.register_backend("shift", ShiftBackend)
+    assert registry.shared_backend("shift", scale=2.0) is not first
 
 
 def test_entry_point_group_lists_builtins():

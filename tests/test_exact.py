@@ -280,7 +280,7 @@ def test_backend_validates_parameters(monkeypatch):
         ExactBackend(broadphase="bullet")
     with pytest.raises(BackendError, match="n_jobs"):
         ExactBackend(n_jobs=0)
-    with pytest.raises(BackendError, match="tuning"):
+    with pytest.raises(BackendError, match=r"unknown parameters \[.voxel.\]"):
         ExactBackend(voxel=3)
     import sys
 
@@ -340,8 +340,9 @@ def test_real_spray_bottle_grasp_matches_plain_boolean():
 
 def test_ray_status_agrees_with_winding_number():
     """The exact point test used for shells with no classified vertex (`ray_status`)."""
-    from exactgrasp.backends.exact.kernels import ray_status, winding_number
-    from exactgrasp.backends.exact.tables import build_grid
+    from exactgrasp.backends.exact.classify import ray_status
+    from exactgrasp.backends.exact.grids import build_grid
+    from exactgrasp.geometry.winding import winding_number
 
     V, F = sphere(1.0, np.zeros(3), 2)
     grid = build_grid(V, F, 0.25)
@@ -362,13 +363,13 @@ def test_small_shell_inside_object_surface_cells_matches_plain_boolean():
     """A hand made of a large box and a tiny separate box just under the object's surface:
     every vertex of the tiny shell lies in a cell the object's surface touches, so its status
     comes from the exact point test, not from the grid."""
-    from exactgrasp.backends.exact.kernels import point_status
+    from exactgrasp.backends.exact.cells import point_status
 
     big = box([0, 0, 0], [2, 2, 2])
     tiny = box([2.302, 0.905, 0.905], [2.312, 0.915, 0.915])
     obj = sphere(0.6, np.array([2.9, 0.91, 0.91]), 4)
     ex = ExactIntersector([big, tiny], [obj], broadphase=None)
-    status = [point_status(v - ex._origin, *ex._bgrid[:4]) for v in tiny[0]]
+    status = [point_status(v - ex.origin, *ex.object_grid[:4]) for v in tiny[0]]
     assert status == [-1] * 8
     P = np.tile(np.eye(4), (4, 1, 1))
     P[:, 0, 3] = [0.0, -0.004, 0.006, -0.35]
@@ -385,16 +386,17 @@ def test_small_shell_inside_object_surface_cells_matches_plain_boolean():
 
 def test_surfaces_cross_is_certain_and_keeps_culling_unchanged():
     """The kernel's cheap test that spares the BVH query: True only where surfaces cross."""
-    from exactgrasp.backends.exact import pose as kp
+    from exactgrasp.backends.exact.classify import surfaces_cross
 
     links, objs = overlapping_hand()
     ex = ExactIntersector(links, objs, broadphase="coal")
     P = np.tile(np.eye(4), (3, 1, 1))
     P[1, :3, 3] = [10.0, 0.0, 0.0]  # far away: not known to cross, left to the broad phase
     P[2, :3, 3] = [-1.7, -0.5, -0.5]  # the object's centre near the hand's corner
-    crossing = kp.surfaces_cross(
-        P, ex._A[0], *ex._shells[0], ex._agrid, ex._B[0], *ex._shells[1], ex._bgrid
-    )
+    crossing = surfaces_cross(
+        P, ex.hand_mesh.vertices, *ex.shells[0], ex.hand_grid, ex.object_mesh.vertices,
+        *ex.shells[1], ex.object_grid,
+    )  # fmt: skip
     assert crossing.tolist() == [True, False, True]
     got = ex.volumes(P)
     assert got[1] == 0.0 and ex.stats["poses_culled"] == 1
@@ -436,13 +438,16 @@ def test_cells_classified_whole_match_analytic_overlap():
 def test_hand_parts_tables_are_consistent():
     """Vertices numbered cell by cell; each part's summed edge weight and the split of every
     vertex's adjacency (edges to other parts first) as the kernel assumes."""
-    from exactgrasp.backends.exact.tables import vertex_cells
+    from exactgrasp.backends.exact.grids import vertex_cells
 
     hand = fine_box([-1, -1, -1], [1, 1, 1], 3)
     ex = ExactIntersector([hand], [box([0, 0, 0], [2, 2, 2])], broadphase=None)
-    V, E, adj_start, adj_vert, adj_edge = (ex._A[k] for k in (0, 2, 6, 7, 8))
-    reps, AW, epart, wsum, split = ex._X[4], ex._X[5], ex._X[9], ex._X[10], ex._X[11]
-    cells = vertex_cells(V, ex._agrid[1])
+    m, t = ex.hand_mesh, ex.hand_tables
+    V, E, adj_start = m.vertices, m.edges, m.adj_start
+    adj_vert, adj_edge = m.adj_vertex, m.adj_edge
+    reps, AW, epart = t.parts, t.edge_weights, t.edge_part
+    wsum, split = t.part_weights, t.adj_split
+    cells = vertex_cells(V, ex.hand_grid.cell)
     assert (np.diff(cells) >= 0).all()
     part = np.repeat(np.arange(len(reps) - 1), np.diff(reps[:, 1]))
     assert (cells[reps[:-1, 1]] == reps[:-1, 0]).all() and len(part) == len(V)
@@ -460,7 +465,7 @@ def test_hand_parts_tables_are_consistent():
 def test_triangle_box_test_against_linear_programme():
     """`tri_box_xyz` (any half sizes) against an LP: does a point of the triangle lie in the
     box?"""
-    from exactgrasp.backends.exact.kernels import tri_box_xyz
+    from exactgrasp.backends.exact.predicates import tri_box_xyz
 
     rng = np.random.default_rng(8)
     hits = 0

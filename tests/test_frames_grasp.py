@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import exactgrasp as eg
-from exactgrasp.hands.frame import FrameError
+from exactgrasp.errors import FrameError
 from tests.conftest import box_arrays
 
 
@@ -130,7 +130,10 @@ def test_grasp_file_errors(tmp_path):
     with pytest.raises(eg.GraspFileError, match="missing required key 'object_pose_in_hand'"):
         eg.Grasp.from_file(nopose)
     noobj = tmp_path / "noobj.json"
-    noobj.write_text(json.dumps({"object": "x.stl", "object_pose_in_hand": np.eye(4).tolist()}))
+    hand = {"type": "builtin", "name": "barrett"}
+    noobj.write_text(
+        json.dumps({"object": "x.stl", "object_pose_in_hand": np.eye(4).tolist(), "hand": hand})
+    )
     with pytest.raises(eg.GraspFileError, match=r"the object file 'x\.stl' .* does not exist"):
         eg.Grasp.from_file(noobj)
 

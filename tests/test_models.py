@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("mujoco", reason="the models extra (mujoco) is not installed")
 
 from exactgrasp.errors import JointError, ModelError
-from exactgrasp.hands.model import PalmSpec, load_model
+from exactgrasp.hands import PalmSpec, load_model
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "barrett-grasps"
 URDF = DATA / "hand" / "barrett.urdf"
@@ -282,9 +282,50 @@ def test_builtin_barrett_distal_coupling():
 
 
 def test_builtin_barrett_hand():
-    pytest.importorskip("exactgrasp.hands.hand", reason="exactgrasp.hands.hand not written yet")
     import exactgrasp.hands as hands
 
     hand = hands.barrett(joints={"finger_1_med_joint": 1.0})
     assert hand.joints["finger_1_med_joint"] == 1.0
     assert len(hand.link_meshes()) == 9
+
+
+# -- built-in parallel gripper, couplings with reference poses --------------------------------
+def test_builtin_parallel_gripper_model():
+    import exactgrasp.hands as hands
+    from exactgrasp.hands.gripper import GRIPPER_STROKE
+
+    model = hands.parallel_gripper_model()
+    assert model.joint_names == ("finger_1_joint",)
+    assert model.couplings == {"finger_2_joint": ("finger_1_joint", 1.0, 0.0)}
+    assert model.joint_limits["finger_1_joint"] == (0.0, GRIPPER_STROKE / 2)
+    assert model.default_joints == {"finger_1_joint": 0.04}  # open
+    assert model.palm == PalmSpec((0, 0, 0), (0, 0, 1), (0, 1, 0), 0.05)
+    for q in (0.0, 0.013, 0.04):
+        links = {n: V for n, V, _ in model.link_meshes({"finger_1_joint": q})}
+        assert links["finger_1"][:, 1].min() == pytest.approx(q, abs=1e-12)
+        assert links["finger_2"][:, 1].max() == pytest.approx(-q, abs=1e-12)
+    hand = hands.parallel_gripper()
+    assert hand.source == {"type": "builtin", "name": "parallel_gripper", "options": {}}
+    assert hands.get_builtin("parallel_gripper") is hands.parallel_gripper
+
+
+def test_joint_equality_holds_between_displacements_from_the_reference(tmp_path):
+    import mujoco
+
+    text = """<mujoco><worldbody><body name="base"><geom type="box" size=".05 .05 .01"/>
+      <body name="f1"><joint name="j1" type="slide" axis="0 1 0" range="0 0.04" ref="0.04"/>
+        <geom type="box" size=".01 .01 .01" pos="0 .05 .02"/></body>
+      <body name="f2"><joint name="j2" type="slide" axis="0 -1 0" range="0 0.08" ref="0.02"/>
+        <geom type="box" size=".01 .01 .01" pos="0 -.05 .02"/></body>
+    </body></worldbody>
+    <equality><joint joint1="j2" joint2="j1" polycoef="0.001 2 0 0 0"/></equality></mujoco>"""
+    model = load_model(_write(tmp_path, text), palm=False)
+    # j2 - 0.02 = 0.001 + 2 (j1 - 0.04): j2 = 2 j1 - 0.059
+    driver, ratio, offset = model.couplings["j2"]
+    assert (driver, ratio) == ("j1", 2.0) and offset == pytest.approx(-0.059, abs=1e-15)
+    m = mujoco.MjModel.from_xml_string(text)
+    data = mujoco.MjData(m)
+    data.qpos[:] = list(model.all_joint_values({"j1": 0.035}).values())
+    mujoco.mj_forward(m, data)
+    equality = data.efc_type[: data.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY
+    assert np.abs(data.efc_pos[: data.nefc][equality]).max() < 1e-12

@@ -10,8 +10,9 @@ from scipy import stats
 pytest.importorskip("mujoco", reason="the models extra (mujoco) is not installed")
 
 import exactgrasp as eg
+from exactgrasp.errors import NoiseError
 from exactgrasp.geometry.manifold import to_manifold, union
-from exactgrasp.grasp.noise import NoiseError, joint_noise
+from exactgrasp.grasp.noise import joint_noise
 from tests.conftest import SHARED_DATA
 
 GRASPS = SHARED_DATA / "barrett-grasps" / "grasps"

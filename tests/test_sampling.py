@@ -1,16 +1,13 @@
+import json
+
 import numpy as np
 import pytest
 import scipy.linalg
 
+from exactgrasp.errors import SamplerError
 from exactgrasp.geometry.se3 import exp_se3, invert_rigid, is_rigid, twist_matrix
-from exactgrasp.paths.sampler import (
-    GOLDEN_ANGLE,
-    PathSampler,
-    SamplerError,
-    rotation_amounts,
-    sphere_points,
-    step_times,
-)
+from exactgrasp.paths import PathSampler, as_sampler
+from exactgrasp.paths.sampler import GOLDEN_ANGLE, rotation_amounts, sphere_points, step_times
 
 
 @pytest.mark.parametrize(
@@ -133,3 +130,31 @@ def test_bad_parameters(kwargs, message):
 def test_unknown_preset():
     with pytest.raises(SamplerError, match="unknown preset 'fast'"):
         PathSampler.preset("fast")
+
+
+def test_as_sampler_takes_every_form():
+    small = PathSampler(3, 2, 2, n_steps=4)
+    assert as_sampler().params == PathSampler.preset("balanced").params
+    assert as_sampler(small) is small
+    assert as_sampler(small, n_steps=4) is small
+    assert as_sampler("rotations").params == PathSampler.preset("rotations").params
+    assert as_sampler("rotations", n_steps=3).n_steps == 3
+    assert as_sampler(None, n_steps=2).params == PathSampler.preset("balanced", n_steps=2).params
+    assert as_sampler(small.params).params == small.params
+    assert as_sampler(json.dumps(small.params), n_steps=5).params == {**small.params, "n_steps": 5}
+
+
+@pytest.mark.parametrize(
+    ("value", "n_steps", "message"),
+    [
+        ("fast", None, "unknown preset 'fast'"),
+        ('{"n_axes": 2', None, "not valid JSON"),
+        ({"n_axes": 2, "speed": 3}, None, "unknown parameter.* speed"),
+        (3, None, "sampler 3 is a int; give None"),
+        (PathSampler(3, 2, 2, n_steps=4), 5, "already built with n_steps=4"),
+        ("balanced", 0, "n_steps must be a positive integer"),
+    ],
+)
+def test_as_sampler_refuses_with_the_accepted_forms(value, n_steps, message):
+    with pytest.raises(SamplerError, match=message):
+        as_sampler(value, n_steps=n_steps)

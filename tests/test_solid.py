@@ -138,3 +138,16 @@ def test_transformed_and_hash():
     shift[:3, 3] = [1, 2, 3]
     assert solid.transformed(shift).hash != solid.hash
     assert solid.transformed(shift).volume == pytest.approx(1.0)
+
+
+def test_repair_of_an_open_box_is_reported(tmp_path):
+    closed = trimesh.creation.box((0.1, 0.1, 0.1))
+    path = tmp_path / "open.stl"
+    trimesh.Trimesh(closed.vertices, closed.faces[1:], process=False).export(path)
+    with pytest.raises(MeshError, match="repair=True"):
+        Solid.from_file(path)
+    with pytest.warns(UserWarning, match=r"repaired \(filled holes"):
+        solid = Solid.from_file(path, repair=True)
+    assert solid.volume == pytest.approx(1e-3, rel=1e-6)
+    assert solid.repair_report["actions"] == ["filled holes (trimesh)"]
+    assert solid.repair_report["volume_before"] == pytest.approx(0.75e-3, rel=1e-6)

@@ -255,22 +255,26 @@ def test_backend_surface_options():
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"hand_resolution": 1}, "hand_resolution must be from 2"),
-        ({"hand_resolution": 50.0}, "hand_resolution must be an integer"),
-        ({"object_resolution": True}, "object_resolution must be an integer"),
-        ({"object_resolution": 5000}, "object_resolution must be from 2 to 1000"),
-        ({"surface_spacing": -1.0}, "surface_spacing must be from 0.05"),
-        ({"surface_spacing": "fine"}, "surface_spacing must be a positive number"),
-        ({"surface_samples": "meshlab"}, "surface_samples must be None, a positive int"),
-        ({"surface_samples": 0}, "surface_samples as a count must be from 1"),
-        ({"surface_samples": 100, "surface_spacing": 1.0}, "not both"),
-        ({"surface_samples": "none", "surface_spacing": 1.0}, "no effect"),
-        ({"surface_weight": "volume"}, "surface_weight must be 'paper' or 'area'"),
-        ({"seed": -1}, "seed must be a non-negative integer"),
+        ({"hand_resolution": 1}, "hand_resolution must be an integer from 2 to 1000, got 1 "),
+        ({"hand_resolution": 50.0}, "hand_resolution must be an integer .* got 50.0"),
+        ({"object_resolution": True}, "object_resolution must be an integer .* got True"),
+        ({"object_resolution": 5000}, "object_resolution must be an integer from 2 to 1000"),
+        ({"surface_spacing": -1.0}, "surface_spacing must be a number from 0.05 to 1000 or None"),
+        ({"surface_spacing": "fine"}, "surface_spacing must be a number .* got 'fine'"),
+        (
+            {"surface_samples": "meshlab"},
+            "surface_samples must be None, an integer from 1 to 10,000,000, 'generate' or 'none'",
+        ),
+        ({"surface_samples": 0}, "surface_samples must be None, an integer from 1 .* got 0"),
+        ({"surface_samples": 100, "surface_spacing": 1.0}, "give either .* not both"),
+        ({"surface_samples": "none", "surface_spacing": 1.0}, "surface_spacing has no effect"),
+        ({"surface_weight": "volume"}, "surface_weight must be 'paper' or 'area', got 'volume'"),
+        ({"seed": -1}, "seed must be a non-negative integer, got -1"),
+        ({"grid": "ceil"}, "grid must be 'floor' or 'round', got 'ceil'"),
     ],
 )
 def test_parameter_validation(kwargs, message):
-    with pytest.raises(BackendError, match=message):
+    with pytest.raises(BackendError, match=f"^VoxelBackend: {message}"):
         VoxelBackend(**kwargs)
 
 
@@ -344,5 +348,5 @@ def test_grid_rules_on_the_flat_cereal_box(shared_data):
     assert errors["floor"] == pytest.approx(8 * 34 * 50 * 5.7**3 / (51 * 197 * 285) - 1, abs=1e-9)
     assert errors["floor"] < -0.12
     assert abs(errors["round"]) < 0.02
-    with pytest.raises(BackendError, match="grid must be one of"):
+    with pytest.raises(BackendError, match="grid must be 'floor' or 'round'"):
         VoxelBackend(grid="ceil")

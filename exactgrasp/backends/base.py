@@ -1,11 +1,18 @@
-"""The interface every intersection backend implements."""
+"""The interface every intersection backend implements, and the rigid-pose check they share.
+
+Imports `exactgrasp.errors`, `exactgrasp.geometry.se3` and the backends' parameter checks.
+"""
 
 from __future__ import annotations
 
 import abc
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+
+from exactgrasp.backends.params import Param
+from exactgrasp.errors import BackendError
+from exactgrasp.geometry.se3 import rigid_defects
 
 if TYPE_CHECKING:
     from exactgrasp.grasp import Grasp
@@ -39,9 +46,6 @@ def check_poses(poses: np.ndarray, name: str = "poses") -> np.ndarray:
         reflection, a scale, a shear, a projective last row); the message names the first
         such pose by its index.
     """
-    from exactgrasp.errors import BackendError
-    from exactgrasp.geometry.se3 import rigid_defects
-
     arr = np.ascontiguousarray(poses, dtype=np.float64)
     if arr.ndim < 2 or arr.shape[-2:] != (4, 4):
         raise BackendError(
@@ -103,12 +107,20 @@ class Backend(abc.ABC):
     A backend sees only validated geometry (through a `Grasp`) and an array of poses; it knows
     nothing of files, samplers or reports.
 
-    Subclasses take every parameter in the constructor, validate it there, and expose them
-    through `params` so that descriptors can record how they were made.
+    Subclasses take every parameter in the constructor, declare what each may be in
+    `parameter_constraints` and check them there with
+    `exactgrasp.backends.params.validate_parameters`, and expose them through `params` so that
+    descriptors can record how they were made (``type(b)(**b.params)`` rebuilds a backend).
+    ``exactgrasp.backends.testing.check_backend`` checks an implementation against this
+    contract.
     """
 
     #: Registry name, e.g. ``"voxel"``.
     name: str = ""
+    #: Relative accuracy the backend claims for a volume (None: an estimate, no bound claimed).
+    volume_rtol: ClassVar[float | None] = None
+    #: What each constructor parameter may be: name -> `Param`.
+    parameter_constraints: ClassVar[dict[str, Param]] = {}
 
     @property
     @abc.abstractmethod

@@ -1,14 +1,16 @@
-"""Descriptors for many grasps: a manifest in, resumable parts and one table out."""
+"""Descriptors for many grasps: a manifest in, resumable parts and one table out.
 
-from exactgrasp.batch.run import (
-    DEFAULT_PART_SIZE,
-    BatchError,
-    BatchSummary,
-    compute_rows,
-    read_batch,
-    read_manifest,
-    run_batch,
-)
+`run` holds `run_batch`, `manifest` the manifest reader, `store` the files of a run, `worker`
+what runs on the workers; the ``exactgrasp batch`` command is `exactgrasp.cli.batch`.
+
+May import: `exactgrasp.errors` and the `exactgrasp.batch` modules; never `exactgrasp.cli`.
+"""
+
+from exactgrasp.batch.manifest import read_manifest
+from exactgrasp.batch.run import DEFAULT_PART_SIZE, BatchSummary, run_batch
+from exactgrasp.batch.store import read_batch
+from exactgrasp.batch.worker import compute_rows
+from exactgrasp.errors import BatchError
 
 __all__ = [
     "DEFAULT_PART_SIZE",

@@ -1,61 +1,52 @@
-"""``exactgrasp batch``: the descriptor of every grasp in a manifest, resumable, on many cores.
+"""`run_batch`: the descriptor of every grasp in a manifest, resumable, on many cores.
 
 Work is cut into parts of ``part_size`` consecutive manifest rows. Each part is one task on a
 dask.distributed cluster (a local cluster of single-threaded processes by default, or an
 existing scheduler); the workers only compute and send results back, and this process writes
 every file, so workers need no shared file system and each part is renamed into place whole.
 A resume skips the parts already there. See ``docs/batch.md`` for the file layout and the
-choices made.
+choices made; the ``exactgrasp batch`` command is `exactgrasp.cli.batch`.
+
+May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.progress`, `exactgrasp.paths`,
+`exactgrasp.backends`, the other `exactgrasp.batch` modules; never `exactgrasp.cli`.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import os
-import sys
 import time
 from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from exactgrasp.backends import Backend, get_backend
+from exactgrasp.backends.defaults import DEFAULT_BACKEND
+from exactgrasp.batch.manifest import Manifest, ManifestRow, read_manifest
 from exactgrasp.batch.store import (
     DESCRIPTORS_FILE,
     ERRORS_FILE,
     FORMAT,
     TIMINGS_FILE,
-    BatchError,
-    Manifest,
-    ManifestRow,
     check_run_record,
     consolidate,
     part_path,
-    read_batch,
-    read_manifest,
     read_part,
     remove_temp_files,
     run_lock,
     write_part,
 )
-from exactgrasp.batch.worker import _as_sampler, _default_workers, _open_pool, compute_rows
+from exactgrasp.batch.worker import default_workers, open_pool
+from exactgrasp.errors import BatchError
+from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.progress import progress_bar
+from exactgrasp.version import __version__
 
-__all__ = [
-    "DEFAULT_PART_SIZE",
-    "BatchError",
-    "BatchSummary",
-    "add_parser",
-    "compute_rows",
-    "read_batch",
-    "read_manifest",
-    "run_batch",
-]
+__all__ = ["DEFAULT_PART_SIZE", "BatchSummary", "run_batch"]
 
 DEFAULT_PART_SIZE = 32
 
@@ -128,8 +119,6 @@ def _failure(row: ManifestRow, exc: BaseException) -> dict:
 
 
 def _run_params(manifest: Manifest, engine: Backend, sampler: PathSampler, **extra) -> dict:
-    from exactgrasp.version import __version__
-
     params = {
         "format": FORMAT,
         "exactgrasp_version": __version__,
@@ -149,7 +138,7 @@ def _run_params(manifest: Manifest, engine: Backend, sampler: PathSampler, **ext
 def run_batch(
     manifest: str | os.PathLike,
     out: str | os.PathLike,
-    backend: str | Backend = "voxel",
+    backend: str | Backend = DEFAULT_BACKEND,
     sampler: PathSampler | str | dict | None = None,
     workers: int | None = None,
     scheduler: str | None = None,
@@ -168,9 +157,10 @@ def run_batch(
     out : path-like
         Output folder (created). Running again with the same arguments finishes what is left.
     backend : str or Backend
-        ``"voxel"`` (default) or ``"exact"`` or a registered name.
+        A registered name (``"voxel"``, the default `backends.defaults.DEFAULT_BACKEND`;
+        ``"exact"``; ...) or an instance.
     sampler : PathSampler or str or dict, optional
-        Default: the ``"balanced"`` preset.
+        Anything `exactgrasp.paths.as_sampler` takes; default: the ``"balanced"`` preset.
     workers : int, optional
         Worker processes of the local cluster (default: the cores this process may use);
         0 computes in this process without a cluster. Not allowed with ``scheduler``.
@@ -197,6 +187,8 @@ def run_batch(
     ------
     BatchError
         A bad manifest (before any work), or an output folder holding another run.
+    SamplerError
+        A ``sampler`` that `exactgrasp.paths.as_sampler` does not take.
     """
     started = time.perf_counter()
     if scheduler is not None and workers is not None:
@@ -206,7 +198,7 @@ def run_batch(
             raise BatchError(f"{name} must be an integer >= {low}, got {value!r}.")
     if on_limit not in (None, "error", "clip"):
         raise BatchError(f"on_limit must be 'error' or 'clip', got {on_limit!r}.")
-    sampler = _as_sampler(sampler)
+    sampler = as_sampler(sampler)
     engine = get_backend(backend, **(backend_params or {}))
     spec = engine if isinstance(backend, Backend) else (backend, dict(backend_params or {}))
     manifest = read_manifest(manifest)
@@ -225,8 +217,8 @@ def run_batch(
         n_workers, compute_seconds = 0, 0.0
         if todo:
             if workers is None and scheduler is None:
-                workers = _default_workers()
-            with _open_pool(workers, scheduler) as pool:
+                workers = default_workers()
+            with open_pool(workers, scheduler) as pool:
                 n_workers, compute_start = pool.workers, time.perf_counter()
                 expected = [params["exactgrasp_version"], params["backend_params"]]
                 task = (str(manifest.base_dir), spec, sampler.params, on_limit, expected)
@@ -308,92 +300,3 @@ def _compute(pool, todo: dict, task: tuple, out: Path, n_values, n_rows, skipped
             fill()
     if collected:
         raise BatchError(f"parts {sorted(collected)} were not completed; run again to resume.")
-
-
-# -- the command line ---------------------------------------------------------------------------
-
-
-def _cli_sampler(text: str, steps: int | None) -> PathSampler:
-    overrides = {"n_steps": steps} if steps else {}
-    if text.lstrip().startswith("{"):
-        try:
-            params = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise BatchError(f"--sampler {text!r}: not valid JSON ({exc}).") from exc
-        return PathSampler(**{**params, **overrides})
-    return PathSampler.preset(text, **overrides)
-
-
-def cmd_batch(args: argparse.Namespace) -> int:
-    """Handler of ``exactgrasp batch``; returns 0 when every row succeeded, 1 otherwise."""
-    from exactgrasp.cli.main import _backend_params
-
-    summary = run_batch(
-        args.manifest,
-        args.out,
-        backend=args.backend,
-        sampler=_cli_sampler(args.sampler, args.steps),
-        workers=args.workers,
-        scheduler=args.scheduler,
-        backend_params=_backend_params(args.param),
-        progress=args.progress,
-        part_size=args.part_size,
-        on_limit=args.on_limit,
-        retry_failed=args.retry_failed,
-    )
-    print(summary.text(), file=sys.stdout)
-    return summary.exit_status
-
-
-def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add the ``batch`` subcommand to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser(
-        "batch",
-        help="descriptors of every grasp in a manifest, resumable, on local cores or a cluster",
-        description=(
-            "Compute the descriptor of every grasp listed in MANIFEST (.jsonl or .parquet; rows "
-            '{"id": ..., "grasp": "path/to/grasp.json" or an inline grasp}) into --out. Run the '
-            "same command again after a kill to finish what is left. Exit status 1 when any "
-            "row failed (see OUT/errors.jsonl), 2 on a bad manifest or arguments."
-        ),
-    )
-    parser.add_argument("manifest", help="manifest file (.jsonl or .parquet)")
-    parser.add_argument("--out", required=True, help="output folder (created; resumed if there)")
-    parser.add_argument("--backend", default="voxel", help="voxel (default) or exact")
-    parser.add_argument(
-        "--param", action="append", default=[], metavar="KEY=VALUE", help="backend parameter"
-    )
-    parser.add_argument(
-        "--sampler",
-        default="balanced",
-        help="preset (balanced, translations, rotations) or JSON parameters, e.g. "
-        '\'{"n_translations": 3, "n_axes": 2, "n_amounts": 2, "n_steps": 3}\'',
-    )
-    parser.add_argument("--steps", type=int, default=None, help="poses per path (default 9)")
-    parser.add_argument(
-        "--workers", type=int, default=None, help="local worker processes (default: all cores)"
-    )
-    parser.add_argument("--scheduler", default=None, help="address of a running dask scheduler")
-    parser.add_argument(
-        "--part-size",
-        type=int,
-        default=DEFAULT_PART_SIZE,
-        help=f"rows per part, the unit of resuming (default {DEFAULT_PART_SIZE})",
-    )
-    parser.add_argument(
-        "--retry-failed", action="store_true", help="compute the parts with failed rows again"
-    )
-    parser.add_argument(
-        "--on-limit",
-        default=None,
-        choices=["error", "clip"],
-        help="joint values outside the limits (default: what each grasp file says)",
-    )
-    parser.add_argument(
-        "--progress",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="progress bar (default: only on a terminal)",
-    )
-    parser.set_defaults(func=cmd_batch)
-    return parser

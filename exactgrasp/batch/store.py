@@ -1,4 +1,4 @@
-"""Files of a batch run: the manifest, the run record, the parts and the consolidated output.
+"""Files of a batch run: the run record, the lock, the parts and the consolidated output.
 
 Layout of an output folder (see ``docs/batch.md``)::
 
@@ -11,23 +11,26 @@ Layout of an output folder (see ``docs/batch.md``)::
     timings.jsonl         per-part wall times and workers (not deterministic, not compared)
 
 Everything but ``timings.jsonl`` is a function of the manifest and the parameters only, so
-the bytes do not depend on the number of workers or on the order parts finish in.
+the bytes do not depend on the number of workers or on the order parts finish in. Every file
+but ``timings.jsonl`` is written through `atomic_target` (temporary name, fsync, rename).
+The manifest is read by `exactgrasp.batch.manifest`.
+
+May import: `exactgrasp.errors`, `exactgrasp.batch.manifest` (pyarrow only through `require`).
 """
 
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import uuid
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from exactgrasp.batch.manifest import ManifestRow
 from exactgrasp.errors import BatchError, require
 
 FORMAT = "exactgrasp.batch/1"
@@ -42,168 +45,45 @@ TEMP_MARK = ".tmp-"
 COMPRESSION = "zstd"
 
 
-@dataclass(frozen=True)
-class ManifestRow:
-    """One manifest row.
-
-    Attributes
-    ----------
-    index : int
-        0-based position among the manifest's rows (the ``row`` of ``errors.jsonl``).
-    id : str
-    grasp : str or dict or None
-        Path of a grasp file (relative to the manifest's folder) or an inline grasp dict.
-    problem : str or None
-        What is wrong with the row's ``grasp`` entry; the row is then reported as failed.
-    """
-
-    index: int
-    id: str
-    grasp: str | dict | None
-    problem: str | None = None
-
-
-@dataclass(frozen=True)
-class Manifest:
-    """A validated manifest: unique ids, rows in file order."""
-
-    path: Path
-    rows: list[ManifestRow]
-    sha256: str
-
-    @property
-    def base_dir(self) -> Path:
-        """Folder that relative grasp paths are resolved against."""
-        return self.path.resolve().parent
-
-
 def _pa():
     return require("pyarrow", "exactgrasp batch", "pyarrow", "batch")
 
 
-def _row_grasp(value: Any) -> tuple[str | dict | None, str | None]:
-    """The grasp entry of a row and, when unusable, why."""
-    if isinstance(value, str) and value.lstrip().startswith("{"):
-        try:
-            value = json.loads(value)
-        except json.JSONDecodeError as exc:
-            return None, f"inline grasp is not valid JSON ({exc})"
-    if isinstance(value, dict):
-        return value, None
-    if isinstance(value, str) and value.strip():
-        return value, None
-    if value is None:
-        return None, "the row has no 'grasp' (a grasp file path or an inline grasp object)"
-    return None, f"'grasp' must be a file path or a grasp object, got {type(value).__name__}"
+# -- atomic writes ------------------------------------------------------------------------------
 
 
-def _row_id(value: Any, where: str) -> str:
-    # bool is an int subclass, but True as an id is almost surely a mistake.
-    if isinstance(value, bool) or not isinstance(value, str | int | np.integer):
-        kind = "missing" if value is None else f"a {type(value).__name__}"
-        raise BatchError(f"{where}: 'id' is {kind}; every row needs a string or integer id.")
-    text = str(value)
-    if not text.strip():
-        raise BatchError(f"{where}: 'id' is empty; every row needs a non-empty id.")
-    return text
-
-
-def _jsonl_records(path: Path) -> Iterator[tuple[str, dict]]:
-    with open(path, encoding="utf-8") as handle:
-        for line_number, line in enumerate(handle, start=1):
-            if not line.strip():
-                continue
-            where = f"{path}: line {line_number}"
-            try:
-                record = json.loads(line)
-            except json.JSONDecodeError as exc:
-                raise BatchError(f"{where}: not valid JSON ({exc}).") from exc
-            if not isinstance(record, dict):
-                raise BatchError(f"{where}: expected a JSON object with 'id' and 'grasp'.")
-            yield where, record
-
-
-def _parquet_records(path: Path) -> Iterator[tuple[str, dict]]:
-    pq = require("pyarrow.parquet", "exactgrasp batch", "pyarrow", "batch")
-    try:
-        table = pq.read_table(path)
-    except Exception as exc:
-        raise BatchError(f"{path}: not a readable Parquet file ({exc}).") from exc
-    missing = {"id", "grasp"} - set(table.column_names)
-    if missing:
-        raise BatchError(
-            f"{path}: Parquet manifests need columns 'id' and 'grasp'; missing {sorted(missing)}."
-        )
-    ids = table.column("id").to_pylist()
-    grasps = table.column("grasp").to_pylist()
-    for number, (row_id, grasp) in enumerate(zip(ids, grasps, strict=True), start=1):
-        yield f"{path}: row {number}", {"id": row_id, "grasp": grasp}
-
-
-def read_manifest(path: str | os.PathLike) -> Manifest:
-    """Read and check a manifest before any work starts.
+@contextlib.contextmanager
+def atomic_target(path: Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` to write; on success it is flushed to disk and renamed
+    to ``path``, so ``path`` exists whole or not at all. On an error it is removed.
 
     Parameters
     ----------
-    path : path-like
-        ``.jsonl`` (one JSON object a line) or ``.parquet``; each row has ``id`` and ``grasp``
-        (a grasp file path relative to the manifest, or an inline grasp; in Parquet, JSON text).
+    path : pathlib.Path
+        The file to create or replace.
 
-    Returns
-    -------
-    Manifest
-
-    Raises
+    Yields
     ------
-    BatchError
-        A missing, empty or duplicate id (naming the line or row), unreadable JSON, no rows.
+    pathlib.Path
+        Where to write, named with `TEMP_MARK` so that `remove_temp_files` finds it after a kill.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise BatchError(f"{path}: no such manifest file.")
-    suffix = path.suffix.lower()
-    if suffix in (".jsonl", ".ndjson", ".json"):
-        records = _jsonl_records(path)
-    elif suffix in (".parquet", ".pq"):
-        records = _parquet_records(path)
-    else:
-        raise BatchError(
-            f"{path}: unknown manifest type {suffix!r}; use .jsonl (one JSON object a line) or "
-            ".parquet (columns 'id' and 'grasp')."
-        )
-    rows: list[ManifestRow] = []
-    first_seen: dict[str, str] = {}
-    digest = hashlib.sha256()
-    for where, record in records:
-        row_id = _row_id(record.get("id"), where)
-        if row_id in first_seen:
-            raise BatchError(
-                f"{where}: duplicate id {row_id!r} (first at {first_seen[row_id]}); ids must be "
-                "unique."
-            )
-        first_seen[row_id] = where.rpartition(": ")[2]
-        raw = record.get("grasp")
-        grasp, problem = _row_grasp(raw)
-        rows.append(ManifestRow(len(rows), row_id, grasp, problem))
-        # The hash covers what the workers see, so reformatting the file does not change it.
-        entry = {"id": row_id, "grasp": grasp if problem is None else repr(raw)}
-        digest.update(json.dumps(entry, sort_keys=True).encode() + b"\n")
-    if not rows:
-        raise BatchError(f"{path}: the manifest has no rows.")
-    return Manifest(path, rows, digest.hexdigest())
-
-
-# -- the run record -----------------------------------------------------------------------------
+    temp = path.with_name(f"{path.name}{TEMP_MARK}{uuid.uuid4().hex}")
+    try:
+        yield temp
+        with open(temp, "rb+") as handle:
+            os.fsync(handle.fileno())
+        os.replace(temp, path)
+    finally:
+        temp.unlink(missing_ok=True)
 
 
 def write_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to a temporary file beside ``path``, flush it to disk, rename it."""
-    temp = path.with_name(f"{path.name}{TEMP_MARK}{uuid.uuid4().hex}")
-    with open(temp, "wb") as handle:
-        handle.write(data)
-        handle.flush()
-        os.fsync(handle.fileno())
-    os.replace(temp, path)
+    """Write ``data`` to ``path`` through `atomic_target`."""
+    with atomic_target(path) as temp:
+        temp.write_bytes(data)
+
+
+# -- the run record -----------------------------------------------------------------------------
 
 
 def check_run_record(out: Path, params: dict[str, Any]) -> None:
@@ -311,11 +191,8 @@ def write_part(out: Path, part: int, results: Sequence[dict], n_values: int) -> 
     table = pa.Table.from_arrays(arrays, schema=schema)
     path = part_path(out, part)
     path.parent.mkdir(parents=True, exist_ok=True)
-    temp = path.with_name(f"{path.name}{TEMP_MARK}{uuid.uuid4().hex}")
-    pq.write_table(table, temp, compression=COMPRESSION)
-    with open(temp, "rb") as handle:
-        os.fsync(handle.fileno())
-    os.replace(temp, path)
+    with atomic_target(path) as temp:
+        pq.write_table(table, temp, compression=COMPRESSION)
     return path
 
 
@@ -357,11 +234,12 @@ def consolidate(out: Path, n_parts: int, params: dict[str, Any]) -> tuple[int, i
     n_values = params["n_paths"] * params["n_steps"]
     fields = [f for f in part_schema(n_values) if f.name in ("id", "values", "metadata")]
     schema = pa.schema(fields, metadata={"exactgrasp.batch": json.dumps(params, sort_keys=True)})
-    target = out / DESCRIPTORS_FILE
-    temp = target.with_name(f"{target.name}{TEMP_MARK}{uuid.uuid4().hex}")
     done = failed = 0
     error_lines = []
-    with pq.ParquetWriter(temp, schema, compression=COMPRESSION) as writer:
+    with (
+        atomic_target(out / DESCRIPTORS_FILE) as temp,
+        pq.ParquetWriter(temp, schema, compression=COMPRESSION) as writer,
+    ):
         for part in range(n_parts):
             table = pq.read_table(part_path(out, part))
             ok = pc.is_null(table.column("error"))
@@ -373,7 +251,6 @@ def consolidate(out: Path, n_parts: int, params: dict[str, Any]) -> tuple[int, i
             for record in bad.to_pylist():
                 error_lines.append(json.dumps(record, sort_keys=True) + "\n")
             failed += bad.num_rows
-    os.replace(temp, target)
     write_atomic(out / ERRORS_FILE, "".join(error_lines).encode())
     return done, failed
 

@@ -1,7 +1,11 @@
-"""The worker side of ``exactgrasp batch``: computing rows, and the pools that run parts.
+"""The worker side of a batch run: computing rows, and the pools that run parts.
 
-Split from `exactgrasp.batch` so that module keeps the run logic (parts, resume, files) and
-this one what executes on a worker process or in this process.
+`exactgrasp.batch.run` keeps the run logic (parts, resume, files); this module holds what
+executes on a worker process (`compute_rows`) or in this process (`open_pool`, the pools).
+
+May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.paths`, `exactgrasp.grasp`,
+`exactgrasp.backends`, `exactgrasp.descriptor`, `exactgrasp.batch.manifest` (distributed only
+through `require`).
 """
 
 from __future__ import annotations
@@ -18,10 +22,16 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from exactgrasp.backends import Backend, get_backend
-from exactgrasp.batch.store import BatchError, ManifestRow
-from exactgrasp.errors import require
+from exactgrasp.backends import Backend
+from exactgrasp.backends.registry import shared_backend
+from exactgrasp.batch.manifest import ManifestRow
+from exactgrasp.descriptor import compute_descriptor
+from exactgrasp.errors import BatchError, require
+from exactgrasp.grasp import Grasp
 from exactgrasp.paths.sampler import PathSampler
+from exactgrasp.version import __version__
+
+__all__ = ["THREAD_ENV", "compute_rows", "default_workers", "open_pool"]
 
 log = logging.getLogger("exactgrasp.batch")
 
@@ -37,31 +47,24 @@ THREAD_ENV = {
 
 # -- on the workers -----------------------------------------------------------------------------
 
-# Backends built in this worker process, by parameters: their caches (hand grids, object
-# points) then serve every later grasp with the same hand or object.
-_WORKER_BACKENDS: dict[str, Backend] = {}
-
 
 def _worker_backend(spec: Backend | tuple[str, dict]) -> Backend:
+    # One instance per (name, parameters) in this worker process: its caches (hand grids,
+    # object points) then serve every later grasp with the same hand or object.
     if isinstance(spec, Backend):
         return spec
     name, params = spec
-    key = json.dumps([name, params], sort_keys=True)
-    if key not in _WORKER_BACKENDS:
-        _WORKER_BACKENDS[key] = get_backend(name, **params)
-    return _WORKER_BACKENDS[key]
+    return shared_backend(name, **params)
 
 
-def _load_grasp(row: ManifestRow, base_dir: Path, on_limit: str | None):
-    from exactgrasp.grasp import Grasp
-
+def _load_grasp(row: ManifestRow, base_dir: Path, on_limit: str | None) -> Grasp:
     if row.problem is not None:
         raise BatchError(row.problem)
     overrides = {} if on_limit is None else {"on_limit": on_limit}
     if isinstance(row.grasp, str):
         path = Path(row.grasp)
         return Grasp.from_file(path if path.is_absolute() else base_dir / path, **overrides)
-    data = {"name": row.id, **row.grasp}
+    data = {"name": str(row.id), **row.grasp}
     source = f"inline grasp of id {row.id!r}"
     return Grasp.from_dict(data, base_dir=base_dir, source=source, **overrides)
 
@@ -101,8 +104,6 @@ def compute_rows(
         or None, ``metadata`` JSON text or None, ``error``, ``message``); ``seconds``;
         ``worker``.
     """
-    from exactgrasp.descriptor import compute_descriptor
-
     start, cpu_start = time.perf_counter(), time.process_time()
     if single_thread:
         try:
@@ -111,8 +112,6 @@ def compute_rows(
             numba.set_num_threads(1)
         except ImportError:
             pass
-    from exactgrasp.version import __version__
-
     sampler = PathSampler.from_params(sampler_params)
     engine = _worker_backend(backend)
     mismatch = None
@@ -214,7 +213,7 @@ class _DaskPool:
 
 
 @contextlib.contextmanager
-def _open_pool(workers: int | None, scheduler: str | None) -> Iterator[Any]:
+def open_pool(workers: int | None, scheduler: str | None) -> Iterator[Any]:
     """The pool for ``workers`` / ``scheduler``, closed (cluster included) on the way out."""
     if scheduler is None and workers == 0:
         yield _SerialPool()
@@ -239,23 +238,9 @@ def _open_pool(workers: int | None, scheduler: str | None) -> Iterator[Any]:
         yield _DaskPool(client)
 
 
-def _default_workers() -> int:
+def default_workers() -> int:
+    """The cores this process may use (at least 1)."""
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # not Linux
         return os.cpu_count() or 1
-
-
-def _as_sampler(sampler: PathSampler | str | dict | None) -> PathSampler:
-    if sampler is None:
-        return PathSampler.preset("balanced")
-    if isinstance(sampler, PathSampler):
-        return sampler
-    if isinstance(sampler, str):
-        return PathSampler.preset(sampler)
-    if isinstance(sampler, dict):
-        return PathSampler.from_params(sampler)
-    raise BatchError(
-        f"sampler must be a PathSampler, a preset name or a dict of its parameters, got "
-        f"{type(sampler).__name__}."
-    )

@@ -1,22 +1,38 @@
-"""``exactgrasp demo``: built-in grasps on every available backend, a table and a plot."""
+"""``exactgrasp demo``: built-in grasps on every available backend, a table and a plot.
+
+May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.geometry`,
+`exactgrasp.hands`, `exactgrasp.paths`, `exactgrasp.grasp`, `exactgrasp.backends`,
+`exactgrasp.descriptor`.
+"""
 
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from exactgrasp.backends import available_backends
+from exactgrasp.backends import get_backend
+from exactgrasp.cli.common import add_progress, add_sampler, sampler_from_args
+from exactgrasp.cli.params import add_param, backend_names, build_backend, split_params
 from exactgrasp.descriptor import Descriptor, compute_descriptor
 from exactgrasp.geometry import objects
 from exactgrasp.grasp import Grasp
-from exactgrasp.paths.sampler import PathSampler
+from exactgrasp.grasp.closing import close_grasp
+from exactgrasp.hands.barrett import barrett
+from exactgrasp.hands.gripper import parallel_gripper
+from exactgrasp.paths.presets import as_sampler
+
+__all__ = ["QUICK_SAMPLER", "add_parser", "cmd_demo", "demo_grasps", "run_demo"]
+
+#: The sampler of ``--quick``: 24 paths x 5 steps.
+QUICK_SAMPLER = {"n_translations": 6, "n_axes": 2, "n_amounts": 2, "n_steps": 5}
 
 
 def _pose(rotation_deg: tuple[float, float, float], translation: tuple[float, float, float]):
-    from scipy.spatial.transform import Rotation
-
     pose = np.eye(4)
     pose[:3, :3] = Rotation.from_euler("xyz", rotation_deg, degrees=True).as_matrix()
     pose[:3, 3] = translation
@@ -24,19 +40,17 @@ def _pose(rotation_deg: tuple[float, float, float], translation: tuple[float, fl
 
 
 def demo_grasps() -> list[Grasp]:
-    """Three contact grasps of the built-in Barrett hand on the built-in objects.
+    """Three contact grasps of the built-in Barrett hand on the built-in objects, and one of
+    the built-in parallel gripper on a box.
 
-    Each object is placed just clear of the open hand (the knuckles top out at z = 0.0914 m)
-    and the fingers are closed onto it with `exactgrasp.grasp.closing.close_grasp`, so the
-    intersection at the grasp itself is zero.
+    Each object is placed just clear of the open hand (the Barrett knuckles top out at
+    z = 0.0914 m) and the fingers are closed onto it with
+    `exactgrasp.grasp.closing.close_grasp`, so the intersection at the grasp itself is zero.
 
     Returns
     -------
     list of Grasp
     """
-    from exactgrasp.grasp.closing import close_grasp
-    from exactgrasp.hands.barrett import barrett
-
     knuckle_top = 0.0914
     specs = [
         # a can lying across the palm, its axis along x (across the fingers)
@@ -50,7 +64,12 @@ def demo_grasps() -> list[Grasp]:
             _pose((0, 90, 0), (-0.1, 0.0, knuckle_top + 0.085)),
         ),
     ]
-    return [close_grasp(Grasp(barrett(), obj, pose, name=name)) for name, obj, pose in specs]
+    grasps = [close_grasp(Grasp(barrett(), obj, pose, name=name)) for name, obj, pose in specs]
+    # The parallel gripper closes towards its lower limit: a 5 cm box between its open jaws.
+    box = objects.box((0.03, 0.05, 0.04))
+    pose = _pose((0, 0, 0), (0, 0, 0.025))
+    grasps.append(close_grasp(Grasp(parallel_gripper(), box, pose, name="gripper box")))
+    return grasps
 
 
 def _plot(descriptors: dict[tuple[str, str], Descriptor], path: Path) -> None:
@@ -89,12 +108,32 @@ def _plot(descriptors: dict[tuple[str, str], Descriptor], path: Path) -> None:
 
 
 def run_demo(
-    out: Path, sampler_name: str = "balanced", quick: bool = False, progress: bool | None = None
+    out: Path,
+    sampler: Any = None,
+    quick: bool = False,
+    progress: bool | None = None,
+    n_steps: int | None = None,
+    backend_params: dict[str, dict[str, Any]] | None = None,
 ) -> int:
     """Compute descriptors of the demo grasps with every available backend.
 
     Writes ``descriptors.png``, ``summary.json`` and one ``.npz`` per grasp and backend into
     ``out``; prints a table of times and values.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        Output folder (created).
+    sampler : PathSampler or str or dict, optional
+        Anything `exactgrasp.paths.as_sampler` takes (default: the ``"balanced"`` preset).
+    quick : bool
+        The small `QUICK_SAMPLER` (24 paths x 5 steps) instead of ``sampler``.
+    progress : bool, optional
+        Progress bars; default only on a terminal.
+    n_steps : int, optional
+        Poses per path, replacing the sampler's.
+    backend_params : dict, optional
+        ``{backend: {parameter: value}}``; backends not named take their defaults.
 
     Returns
     -------
@@ -102,13 +141,10 @@ def run_demo(
         Exit status (0).
     """
     out.mkdir(parents=True, exist_ok=True)
-    sampler = (
-        PathSampler(n_translations=6, n_axes=2, n_amounts=2, n_steps=5)
-        if quick
-        else PathSampler.preset(sampler_name)
-    )
-    backends = [b for b in ("voxel", "exact") if b in available_backends()]
-    backends += sorted(available_backends() - set(backends))
+    sampler = as_sampler(QUICK_SAMPLER if quick else sampler, n_steps=n_steps)
+    backends = backend_names()
+    params = backend_params or {}
+    engines = {name: get_backend(name, **params.get(name, {})) for name in backends}
     print(f"sampler: {sampler!r} ({sampler.n_paths} paths, {sampler.n_poses} poses)")
     print(f"backends: {', '.join(backends)}")
     grasps = demo_grasps()
@@ -117,7 +153,7 @@ def run_demo(
     print(f"{'grasp':>12} {'backend':>8} {'seconds':>8} {'mean':>9} {'max':>9}")
     for grasp in grasps:
         for backend in backends:
-            d = compute_descriptor(grasp, sampler, backend=backend, progress=progress)
+            d = compute_descriptor(grasp, sampler, backend=engines[backend], progress=progress)
             descriptors[(grasp.name, backend)] = d
             d.save(out / f"{grasp.name.replace(' ', '_')}_{backend}.npz")
             row = {
@@ -136,3 +172,38 @@ def run_demo(
     (out / "summary.json").write_text(json.dumps(rows, indent=1))
     print(f"wrote {out / 'descriptors.png'}, {out / 'summary.json'} and the .npz descriptors")
     return 0
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    """Handler of ``exactgrasp demo``."""
+    sampler = sampler_from_args(args)  # checked even with --quick, which replaces it
+    if args.quick:
+        sampler = as_sampler(QUICK_SAMPLER, n_steps=args.steps)
+    names = backend_names()
+    params = split_params(args.param, names)
+    for name in names:
+        build_backend(name, params[name])  # refuses bad parameters before any work starts
+    return run_demo(Path(args.out), sampler, progress=args.progress, backend_params=params)
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add the ``demo`` sub-command to the ``exactgrasp`` command's subparsers."""
+    parser = subparsers.add_parser(
+        "demo",
+        help="built-in grasps on every available backend",
+        description="Close the built-in Barrett hand onto three built-in objects and the "
+        "built-in parallel gripper onto a box, compute each "
+        "grasp's descriptor with every available backend, print a table of times and values "
+        "and write a plot, a summary and the descriptors into --out.",
+    )
+    parser.add_argument("--out", default="demo-output", help="folder for the plot and table")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="a small sampler (24 paths x 5 steps) instead of --sampler, for a fast look",
+    )
+    add_param(parser)
+    add_sampler(parser)
+    add_progress(parser)
+    parser.set_defaults(func=cmd_demo)
+    return parser

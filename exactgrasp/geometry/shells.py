@@ -30,18 +30,16 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from numba import njit
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from exactgrasp.errors import MeshError, warn_caller
+from exactgrasp.geometry.crossings import CROSS, UNSURE, find_crossings
 from exactgrasp.geometry.manifold import to_manifold
-from exactgrasp.geometry.predicates import orient_bound, orient_det
 from exactgrasp.geometry.winding import winding_number
 
 __all__ = ["find_crossings", "resolve_shells", "split_shells"]
 
-_NO, _CROSS, _UNSURE = 0, 1, 2
 _MERGE_FIX = (
     "overlapping shells cannot be merged; fix the mesh in a modeller (e.g. MeshLab's "
     "'Remove Duplicate Vertices' and 'Repair non Manifold Vertices')."
@@ -50,186 +48,6 @@ _SELF_FIX = (
     "fix the mesh in a modeller (e.g. MeshLab's 'Select Self Intersecting Faces', then delete "
     "them and close the hole, or Blender's 3D-print toolbox 'Intersect Face')"
 )
-
-
-# -- numba kernels ----------------------------------------------------------------------------
-
-
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _sign(det, bound):
-    if det > bound:
-        return 1
-    if det < -bound:
-        return -1
-    return 0
-
-
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _edge_tri(X, e0, e1, a, b, c, bound):
-    """Does the closed segment from corner ``e0`` to ``e1`` meet the closed triangle of
-    corners ``a, b, c``? Corners are rows of X (6, 3): scalar loads, no array views in the
-    hot loop.
-
-    Returns ``(code, lam)``: `_NO` (certainly not), `_CROSS` (certainly, through the
-    triangle's interior, at ``X[e0] + lam (X[e1] - X[e0])``) or `_UNSURE`.
-    """
-    px, py, pz = X[e0, 0], X[e0, 1], X[e0, 2]
-    qx, qy, qz = X[e1, 0], X[e1, 1], X[e1, 2]
-    ax, ay, az = X[a, 0], X[a, 1], X[a, 2]
-    bx, by, bz = X[b, 0], X[b, 1], X[b, 2]
-    cx, cy, cz = X[c, 0], X[c, 1], X[c, 2]
-    dp = orient_det(ax, ay, az, bx, by, bz, cx, cy, cz, px, py, pz)
-    dq = orient_det(ax, ay, az, bx, by, bz, cx, cy, cz, qx, qy, qz)
-    sp = _sign(dp, bound)
-    sq = _sign(dq, bound)
-    if sp != 0 and sp == sq:
-        return _NO, 0.0
-    s1 = _sign(orient_det(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz), bound)
-    s2 = _sign(orient_det(px, py, pz, qx, qy, qz, bx, by, bz, cx, cy, cz), bound)
-    s3 = _sign(orient_det(px, py, pz, qx, qy, qz, cx, cy, cz, ax, ay, az), bound)
-    if (s1 > 0 or s2 > 0 or s3 > 0) and (s1 < 0 or s2 < 0 or s3 < 0):
-        return _NO, 0.0
-    if sp == 0 or sq == 0 or s1 == 0 or s2 == 0 or s3 == 0:
-        return _UNSURE, 0.0
-    return _CROSS, dp / (dp - dq)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _tri_tri(V, F, t, u, skip_shared, X, out):
-    """Do triangles t and u of (V, F) meet? `_NO`, `_CROSS` (a certain crossing, its point
-    written to ``out`` (3,)) or `_UNSURE`. With ``skip_shared`` (triangles of one shell
-    sharing one corner), meeting only at that corner counts as `_NO`. ``X`` (6, 3) is
-    scratch space.
-
-    Two closed triangles meet iff an edge of one meets the other, so six edge tests decide.
-    """
-    for k in range(3):
-        for ax in range(3):
-            X[k, ax] = V[F[t, k], ax]
-            X[k + 3, ax] = V[F[u, k], ax]
-    ext = 0.0
-    for ax in range(3):
-        lo = X[0, ax]
-        hi = lo
-        for k in range(1, 6):
-            lo = min(lo, X[k, ax])
-            hi = max(hi, X[k, ax])
-        ext = max(ext, hi - lo)
-    bound = orient_bound(ext * (1.0 + 1e-12))
-    # Cheap rejection: one triangle certainly on one side of the other's plane. With
-    # ``skip_shared``, a corner shared by both is left out: the pair then meets only there.
-    for first in range(2):
-        a, b = (0, 3) if first == 0 else (3, 0)
-        ta, tb = (t, u) if first == 0 else (u, t)
-        side = 0
-        split = False
-        for k in range(3):
-            vk = F[tb, k]
-            if skip_shared and (vk == F[ta, 0] or vk == F[ta, 1] or vk == F[ta, 2]):
-                continue
-            s = _sign(
-                orient_det(X[a, 0], X[a, 1], X[a, 2], X[a + 1, 0], X[a + 1, 1], X[a + 1, 2],
-                        X[a + 2, 0], X[a + 2, 1], X[a + 2, 2],
-                        X[b + k, 0], X[b + k, 1], X[b + k, 2]),
-                bound,
-            )  # fmt: skip
-            if s == 0 or (side != 0 and s != side):
-                split = True
-                break
-            side = s
-        if not split:
-            return _NO
-    result = _NO
-    for first in range(2):
-        a, b = (0, 3) if first == 0 else (3, 0)
-        for k in range(3):
-            e0 = a + k
-            e1 = a + (k + 1) % 3
-            code, lam = _edge_tri(X, e0, e1, b, b + 1, b + 2, bound)
-            if code == _CROSS:
-                for ax in range(3):
-                    out[ax] = X[e0, ax] + lam * (X[e1, ax] - X[e0, ax])
-                return _CROSS
-            if code == _UNSURE:
-                result = _UNSURE
-    return result
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _fill_cells(i0, i1, n, offsets, keys, tris):
-    """Write the (flat cell, triangle) entries of every triangle's bounding-box cell range."""
-    for f in range(i0.shape[0]):
-        q = offsets[f]
-        for i in range(i0[f, 0], i1[f, 0] + 1):
-            for j in range(i0[f, 1], i1[f, 1] + 1):
-                for k in range(i0[f, 2], i1[f, 2] + 1):
-                    keys[q] = (i * n[1] + j) * n[2] + k
-                    tris[q] = f
-                    q += 1
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _pair_scan(V, F, shell, lo, hi, i0, n, keys, tris):
-    """Test every pair of triangles sharing a grid cell, once (in the first cell they share).
-
-    Returns arrays ``t, u, code, point (k, 3)`` of the pairs that matter: certain crossings
-    within one shell, and certain or uncertain contacts between two shells.
-    """
-    ts = [np.int64(0) for _ in range(0)]
-    us = [np.int64(0) for _ in range(0)]
-    codes = [np.int64(0) for _ in range(0)]
-    pts = [0.0 for _ in range(0)]
-    out = np.zeros(3)
-    X = np.empty((6, 3))
-    start = 0
-    total = keys.shape[0]
-    while start < total:
-        end = start + 1
-        while end < total and keys[end] == keys[start]:
-            end += 1
-        cell = keys[start]
-        # Sweep along x: sorted by lower x, a cell's later triangles start past t's end.
-        run = tris[start:end]
-        run = run[np.argsort(lo[run, 0], kind="mergesort")]
-        for p in range(run.shape[0]):
-            t = run[p]
-            for q in range(p + 1, run.shape[0]):
-                u = run[q]
-                if lo[u, 0] > hi[t, 0]:
-                    break
-                if (
-                    lo[t, 1] > hi[u, 1]
-                    or lo[u, 1] > hi[t, 1]
-                    or lo[t, 2] > hi[u, 2]
-                    or lo[u, 2] > hi[t, 2]
-                ):
-                    continue
-                first = (max(i0[t, 0], i0[u, 0]) * n[1] + max(i0[t, 1], i0[u, 1])) * n[2]
-                if first + max(i0[t, 2], i0[u, 2]) != cell:
-                    continue
-                shared = 0
-                for a in range(3):
-                    for b in range(3):
-                        if F[t, a] == F[u, b]:
-                            shared += 1
-                if shared >= 2:
-                    continue
-                code = _tri_tri(V, F, t, u, shared == 1 and shell[t] == shell[u], X, out)
-                if code == _NO or (code == _UNSURE and shell[t] == shell[u]):
-                    continue
-                ts.append(t)
-                us.append(u)
-                codes.append(code)
-                pts.append(out[0] if code == _CROSS else np.nan)
-                pts.append(out[1] if code == _CROSS else np.nan)
-                pts.append(out[2] if code == _CROSS else np.nan)
-        start = end
-    return (
-        np.array(ts, np.int64),
-        np.array(us, np.int64),
-        np.array(codes, np.int64),
-        np.array(pts, np.float64).reshape(-1, 3),
-    )
 
 
 # -- topology and crossings -------------------------------------------------------------------
@@ -262,56 +80,6 @@ def split_shells(faces: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
     rank = np.empty(n, np.int64)
     rank[np.argsort(first)] = np.arange(n)
     return int(n), rank[label]
-
-
-def find_crossings(
-    vertices: np.ndarray, faces: np.ndarray, label: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Pairs of triangles that cross (within a shell) or may touch (between shells).
-
-    Parameters
-    ----------
-    vertices : numpy.ndarray, shape (n, 3), float64
-    faces : numpy.ndarray, shape (m, 3), int64
-    label : numpy.ndarray, shape (m,), int64
-        Shell of every face (`split_shells`).
-
-    Returns
-    -------
-    t, u : numpy.ndarray, shape (k,), int64
-        Face indices of each pair found.
-    code : numpy.ndarray, shape (k,), int64
-        1: a certain crossing; 2: uncertain contact (only between different shells).
-    point : numpy.ndarray, shape (k, 3), float64
-        A point of a certain crossing (NaN for uncertain contacts), in vertex units.
-    """
-    V = np.ascontiguousarray(vertices, dtype=np.float64)
-    F = np.ascontiguousarray(faces, dtype=np.int64)
-    corners = V[F]
-    lo = np.ascontiguousarray(corners.min(1))
-    hi = np.ascontiguousarray(corners.max(1))
-    origin = lo.min(0)
-    span = float((hi.max(0) - origin).max())
-    size = float((hi - lo).max(1).mean())
-    h = max(size, span * 1e-6, 1e-300)
-    while True:
-        # Cells of about a triangle's size: few pairs per cell; coarser while long triangles
-        # would fill too many cells.
-        n = np.minimum(np.floor((hi.max(0) - origin) / h).astype(np.int64) + 1, 2**20)
-        i0 = np.minimum(np.floor((lo - origin) / h).astype(np.int64), n - 1)
-        i1 = np.minimum(np.floor((hi - origin) / h).astype(np.int64), n - 1)
-        counts = np.prod(i1 - i0 + 1, axis=1)
-        if counts.sum() <= 16 * len(F) + 1024 or h >= span:
-            break
-        h *= 2.0
-    offsets = np.zeros(len(F) + 1, np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    keys = np.empty(offsets[-1], np.int64)
-    tris = np.empty(offsets[-1], np.int64)
-    _fill_cells(i0, i1, n, offsets, keys, tris)
-    order = np.argsort(keys, kind="stable")
-    label = np.ascontiguousarray(label, dtype=np.int64)
-    return _pair_scan(V, F, label, lo, hi, i0, n, keys[order], tris[order])
 
 
 # -- resolution -------------------------------------------------------------------------------
@@ -400,8 +168,8 @@ def resolve_shells(
     report: dict[str, Any] = {
         "n_shells": n_shells,
         "shells": [],
-        "crossing_pairs": int((code == _CROSS).sum()),
-        "touching_pairs": int((code == _UNSURE).sum()),
+        "crossing_pairs": int((code == CROSS).sum()),
+        "touching_pairs": int((code == UNSURE).sum()),
         "actions": [],
         "volume_before": total,
         "volume_after": total,
@@ -515,7 +283,7 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
         pos = [int(i) for i in idx if sign[i] > 0]
         neg = [int(i) for i in idx if sign[i] < 0]
         pairs = int(np.isin(la, idx).sum())
-        crossing = int(((code == _CROSS) & np.isin(la, idx)).sum())
+        crossing = int(((code == CROSS) & np.isin(la, idx)).sum())
         how = f"{crossing} crossing and {pairs - crossing} touching triangle pairs"
         if neg and pos:
             if w != 0:

@@ -270,7 +270,8 @@ class Solid:
         mesh.remove_unreferenced_vertices()
         # Body by body: a whole-mesh pymeshfix keeps only the largest component, which would
         # silently drop, e.g., one of the two halves of the authors' FoodClip.
-        bodies = mesh.split(only_watertight=False)
+        # trimesh's split would fill holes itself, unreported.
+        bodies = mesh.split(only_watertight=False, repair=False)
         if len(bodies) == 0:
             bodies = [mesh]
         repaired = [self._repair_body(body, actions) for body in bodies]

@@ -1,41 +1,151 @@
-"""Reading and writing the object and hand parts of grasp JSON files (see `exactgrasp.grasp`)."""
+"""Reading and writing the object and hand parts of grasp files (see `exactgrasp.grasp.grasp`
+and ``docs/grasp-file.md``).
+
+Errors from reading the object or the hand are re-raised as errors of the grasp file: naming
+it, the key concerned and the fix as the file spells it (``"object_repair": true``, not
+``repair=True``). Hands are read and written through `exactgrasp.hands.sources.HAND_SOURCES`.
+Imports `exactgrasp.errors`, `exactgrasp.geometry` (files, intake, solid), `exactgrasp.hands`
+(frame, hand, sources) and `exactgrasp.grasp.schema`; never `exactgrasp.grasp.grasp`.
+"""
 
 from __future__ import annotations
 
+import ast
+import json
 import os
+import re
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from exactgrasp.errors import ExactGraspError, GraspFileError
-from exactgrasp.geometry.solid import Solid, unit_scale
+from exactgrasp.errors import (
+    ExactGraspError,
+    FrameError,
+    GraspFileError,
+    JointError,
+    MeshError,
+    ModelError,
+)
+from exactgrasp.geometry.files import relative_path, resolve_path, write_ply
+from exactgrasp.geometry.intake import unit_scale
+from exactgrasp.geometry.solid import Solid
+from exactgrasp.grasp.schema import schema_dict
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.hand import Hand
+from exactgrasp.hands.sources import HAND_SOURCES, source_for
+
+__all__ = [
+    "HAND_KEYS",
+    "OBJECT_KEYS",
+    "file_spelling",
+    "read_hand",
+    "read_object",
+    "write_hand",
+    "write_object",
+]
+
+# -- the file's spelling of a fix -------------------------------------------------------------
+
+_LITERAL = r"""'[^']*'|"[^"]*"|True|False|None|-?\d[\w.+-]*|\[[^\]]*\]|\{[^}]*\}"""
 
 
-def _resolve(base_dir: Path, relative: str, source: str, what: str) -> Path:
-    path = Path(relative)
-    path = path if path.is_absolute() else base_dir / path
-    if not path.exists():
-        raise GraspFileError(
-            f"{source}: the {what} file {relative!r} (resolved to {path}) does not exist; paths "
-            "in a grasp file are relative to the grasp file."
+def _json_text(key: str, value: str | None) -> str:
+    if value is None:
+        shown = "..."
+    else:
+        try:
+            shown = json.dumps(ast.literal_eval(value))
+        except (ValueError, SyntaxError):
+            shown = value
+    *outer, last = key.split(".")
+    text = f"{json.dumps(last)}: {shown}"
+    for name in reversed(outer):
+        text = f"{json.dumps(name)}: {{{text}}}"
+    return text
+
+
+def file_spelling(message: str, keys: dict[str, str]) -> str:
+    """A library message with Python arguments (``repair=True``) spelled as grasp-file keys.
+
+    Parameters
+    ----------
+    message : str
+    keys : dict of str to str
+        Python argument name -> the grasp-file key that sets it (dotted when nested, e.g.
+        ``{"repair": "hand_options.repair"}``).
+
+    Returns
+    -------
+    str
+        ``pass repair=True`` becomes ``set "object_repair": true in the grasp file`` (for
+        ``{"repair": "object_repair"}``), a bare ``repair=True`` becomes
+        ``"object_repair": true``.
+    """
+    if not keys:
+        return message
+    names = "|".join(re.escape(name) for name in sorted(keys, key=len, reverse=True))
+    # Not inside a call's arguments: "Solid(repair=True) does" stays as it is.
+    pattern = re.compile(rf"(?<![(\w.])(?<!, )(?:([Pp])ass )?({names})=({_LITERAL})?")
+
+    def spell(match: re.Match) -> str:
+        text = _json_text(keys[match.group(2)], match.group(3))
+        if match.group(1):
+            return f"{'S' if match.group(1) == 'P' else 's'}et {text} in the grasp file"
+        return text
+
+    return pattern.sub(spell, message)
+
+
+#: The grasp-file key behind each Python argument, by the part of the file being read.
+OBJECT_KEYS = {
+    "repair": "object_repair",
+    "units": "object_units",
+    "surface_samples": "object_surface_samples",
+}
+JOINT_KEYS = {"on_limit": "on_limit", "joints": "joints"}
+_MODEL_OPTIONS = schema_dict()["properties"]["hand_options"]["properties"]
+HAND_KEYS = {
+    "model": {**{k: f"hand_options.{k}" for k in _MODEL_OPTIONS}, **JOINT_KEYS},
+    "builtin": {
+        "distal_coupling": "hand.options.distal_coupling",
+        "tessellation": "hand.options.tessellation",
+        **JOINT_KEYS,
+    },
+    "file": {"repair": "hand.repair", "units": "hand.units"},
+    "meshes": {},
+}
+#: The key an error of each hand kind is about.
+HAND_KEY = {"model": "hand_model", "builtin": "hand", "file": "hand", "meshes": "hand"}
+_NO_FRAME = re.compile(r"pass frame=.*$")
+# Python-only escape hatches that no grasp-file key reaches.
+_PYTHON_ONLY = re.compile(r",? or pass check_scale=False[^.;]*")
+
+
+def _as_file_error(exc: ExactGraspError, source: str, key: str, keys: dict) -> ExactGraspError:
+    """``exc`` re-raised for a grasp file: naming ``key``, fixes spelled as file keys."""
+    message = _PYTHON_ONLY.sub("", file_spelling(str(exc), keys))
+    if isinstance(exc, FrameError):
+        frame = '{"origin": [x, y, z], "normal": [x, y, z], "up": [x, y, z], "depth": d}'
+        message = _NO_FRAME.sub(
+            f'give "hand_frame": {frame} (the paper\'s frame) or "hand_frame": '
+            '{"identity": true} in the grasp file.',
+            message,
         )
-    return path
+    if isinstance(exc, JointError):
+        # Joint errors keep their class: callers (batch reports) sort failures by it.
+        return JointError(f"{source}: {key}: {message}")
+    return GraspFileError(f"{source}: {key}: {message}")
 
 
-def _relative(path: str | os.PathLike, base_dir: Path) -> str:
-    return os.path.relpath(Path(path).resolve(), base_dir.resolve())
+# -- reading and writing ---------------------------------------------------------------------
 
 
 def read_object(data: dict, base_dir: Path, source: str, overrides: dict) -> Solid:
     """The grasp's object, from ``object``, ``object_units``, ``object_repair``,
     ``object_surface_samples``."""
-    path = _resolve(base_dir, data["object"], source, "object")
+    path = resolve_path(base_dir, data["object"], source, "object")
     samples = overrides.get("surface_samples", data.get("object_surface_samples"))
-    if isinstance(samples, str):
-        samples = _resolve(base_dir, samples, source, "surface samples")
+    if isinstance(samples, str | os.PathLike):
+        samples = resolve_path(base_dir, samples, source, "object_surface_samples")
     repair = overrides.get("repair", data.get("object_repair", False))
     try:
         return Solid.from_file(
@@ -44,72 +154,51 @@ def read_object(data: dict, base_dir: Path, source: str, overrides: dict) -> Sol
             repair=repair,
             surface_samples=samples,
         )
-    except ExactGraspError as exc:
-        raise type(exc)(f"{source}: object: {exc}") from exc
+    except (MeshError, ModelError) as exc:
+        raise _as_file_error(exc, source, "object", OBJECT_KEYS) from exc
+
+
+def _check_package_dirs(data: dict, base_dir: Path, source: str) -> None:
+    """Every folder of ``hand_options.package_dirs`` exists, relative to the grasp file."""
+    dirs = (data.get("hand_options") or {}).get("package_dirs")
+    if dirs is None:
+        return
+    if isinstance(dirs, str):
+        dirs = [dirs]
+    for folder in dirs.values() if isinstance(dirs, dict) else dirs:
+        path = base_dir / folder
+        if not path.is_dir():
+            raise GraspFileError(
+                f"{source}: hand_options.package_dirs: the folder {folder!r} (resolved to "
+                f"{path}) does not exist; paths in a grasp file are relative to the grasp file."
+            )
 
 
 def read_hand(data: dict, base_dir: Path, source: str, overrides: dict) -> Hand:
     """The grasp's hand, from ``hand`` (files written here) or ``hand_model`` (shared data)."""
     joints = data.get("joints") or {}
     on_limit = overrides.get("on_limit", data.get("on_limit", "error"))
-    frame = HandFrame.from_dict(data["hand_frame"]) if data.get("hand_frame") else None
-    spec = data.get("hand")
     try:
-        if spec is None:
-            if "hand_model" not in data:
-                raise GraspFileError(
-                    f"{source}: names no hand; give 'hand_model' (an MJCF/URDF path) or 'hand'."
-                )
-            path = _resolve(base_dir, data["hand_model"], source, "hand model")
-            options = data.get("hand_options") or {}
-            return Hand.from_urdf(path, joints=joints, frame=frame, on_limit=on_limit, **options)
-        kind = spec.get("type")
-        if kind == "builtin":
-            from exactgrasp.hands import get as builtin_hand
-
-            builder = builtin_hand(spec["name"])
-            options = spec.get("options") or {}
-            return builder(joints=joints, frame=frame, on_limit=on_limit, **options)
-        if kind == "file":
-            path = _resolve(base_dir, spec["path"], source, "hand mesh")
-            return Hand.from_file(
-                path, frame=frame, units=spec.get("units", "m"), repair=spec.get("repair", False)
-            )
-        if kind == "meshes":
-            solids = [
-                Solid.from_file(_resolve(base_dir, p, source, "hand link"), units="m")
-                for p in spec["paths"]
-            ]
-            return Hand.from_meshes(solids, frame=frame, names=spec.get("names"))
+        frame = HandFrame.from_dict(data["hand_frame"]) if data.get("hand_frame") else None
+    except FrameError as exc:
+        raise GraspFileError(f"{source}: hand_frame: {exc}") from exc
+    spec = data.get("hand")
+    kind = "model" if spec is None else spec.get("type")
+    if kind not in HAND_SOURCES:
         raise GraspFileError(
-            f"{source}: hand type {kind!r} is unknown; use 'builtin', 'file' or 'meshes'."
+            f"{source}: hand.type {kind!r} is unknown; use one of "
+            f"{sorted(set(HAND_SOURCES) - {'model'})} (or 'hand_model' for a model file)."
+        )
+    _check_package_dirs(data, base_dir, source)
+    try:
+        return HAND_SOURCES[kind].read(
+            data, base_dir, source, joints=joints, frame=frame, on_limit=on_limit
         )
     except GraspFileError:
         raise
-    except ExactGraspError as exc:
-        raise type(exc)(f"{source}: hand: {exc}") from exc
-
-
-def write_ply(path: Path, vertices: np.ndarray, faces: np.ndarray | None = None) -> None:
-    """Binary little-endian PLY with float64 vertices (trimesh's exporter writes float32,
-    which would break bit-for-bit round trips of grasp files)."""
-    vertices = np.ascontiguousarray(vertices, dtype="<f8")
-    header = [
-        "ply",
-        "format binary_little_endian 1.0",
-        f"element vertex {len(vertices)}",
-        "property double x",
-        "property double y",
-        "property double z",
-    ]
-    body = vertices.tobytes()
-    if faces is not None:
-        header += [f"element face {len(faces)}", "property list uchar int vertex_indices"]
-        rows = np.zeros(len(faces), dtype=[("n", "u1"), ("v", "<i4", (3,))])
-        rows["n"] = 3
-        rows["v"] = faces
-        body += rows.tobytes()
-    path.write_bytes(("\n".join([*header, "end_header"]) + "\n").encode() + body)
+    except (MeshError, ModelError, FrameError, JointError) as exc:
+        key = "joints" if isinstance(exc, JointError) else HAND_KEY[kind]
+        raise _as_file_error(exc, source, key, HAND_KEYS[kind]) from exc
 
 
 def write_object(obj: Solid, base_dir: Path, stem: str) -> dict[str, Any]:
@@ -117,12 +206,12 @@ def write_object(obj: Solid, base_dir: Path, stem: str) -> dict[str, Any]:
     if obj.source is not None:
         src = obj.source
         out: dict[str, Any] = {
-            "object": _relative(src["path"], base_dir),
+            "object": relative_path(src["path"], base_dir),
             "object_units": src["units"],
             "object_repair": src["repair"],
         }
         if src.get("surface_samples"):
-            out["object_surface_samples"] = _relative(src["surface_samples"], base_dir)
+            out["object_surface_samples"] = relative_path(src["surface_samples"], base_dir)
         elif obj.surface_samples is not None:
             name = f"{stem}.samples.ply"
             write_ply(base_dir / name, obj.surface_samples / unit_scale(src["units"]))
@@ -141,29 +230,5 @@ def write_object(obj: Solid, base_dir: Path, stem: str) -> dict[str, Any]:
 def write_hand(hand: Hand, base_dir: Path, stem: str) -> dict[str, Any]:
     """The hand keys of a grasp file; hands not read from files are written as link meshes."""
     out: dict[str, Any] = {"joints": dict(hand.joints), "hand_frame": hand.frame.to_dict()}
-    src = hand.source or {}
-    kind = src.get("type")
-    if kind == "builtin":
-        out["hand"] = {"type": "builtin", "name": src["name"], "options": src.get("options", {})}
-    elif kind == "model":
-        out["hand_model"] = _relative(src["path"], base_dir)
-        if src.get("options"):
-            out["hand_options"] = src["options"]
-    elif kind == "file":
-        out["hand"] = {
-            "type": "file",
-            "path": _relative(src["path"], base_dir),
-            "units": src["units"],
-            "repair": src["repair"],
-        }
-    else:
-        folder = base_dir / f"{stem}.hand"
-        folder.mkdir(exist_ok=True)
-        paths = []
-        for i, (vertices, faces) in enumerate(hand.link_arrays()):
-            name = f"{i:02d}_{hand.link_names[i].replace('/', '_')}.ply"
-            write_ply(folder / name, vertices, faces)
-            paths.append(f"{stem}.hand/{name}")
-        out["hand"] = {"type": "meshes", "paths": paths, "names": hand.link_names}
-        out["joints"] = {}
+    out.update(source_for(hand).write(hand, base_dir, stem))
     return out

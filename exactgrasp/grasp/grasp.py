@@ -1,9 +1,14 @@
 """A grasp: a hand, an object and the object's pose in the hand, with JSON files.
 
-The JSON schema is the one of the shared Barrett data (``barrett-grasps/``): ``object`` (path
-relative to the file), ``object_units``, ``object_pose_in_hand`` (object metres -> hand
-coordinates), ``hand_model`` (path relative to the file) and ``joints``; files written here add
-``format``, ``hand`` (how to rebuild the hand when it is not a model file) and ``hand_frame``.
+Grasp files follow ``grasp-file.schema.json`` (`exactgrasp.grasp.schema`, described key by key
+in ``docs/grasp-file.md``): the keys of the shared Barrett data (``object`` and ``hand_model``
+relative to the file, ``object_units``, ``object_pose_in_hand`` from object metres to hand
+coordinates, ``joints``) and those written here (``format``, ``hand`` for hands that are not a
+model file, ``hand_options``, ``hand_frame``). Files are checked against the schema before
+anything is read.
+
+Imports `exactgrasp.errors`, `exactgrasp.geometry` (se3, solid), `exactgrasp.hands` (frame,
+hand) and `exactgrasp.grasp` files and schema.
 """
 
 from __future__ import annotations
@@ -20,9 +25,14 @@ import numpy as np
 from exactgrasp.errors import GraspFileError
 from exactgrasp.geometry.se3 import is_rigid
 from exactgrasp.geometry.solid import Solid
+from exactgrasp.grasp.files import read_hand, read_object, write_hand, write_object
+from exactgrasp.grasp.schema import check_grasp_data
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.hand import Hand
 
+__all__ = ["FORMAT", "Grasp", "check_pose"]
+
+#: The ``format`` tag of grasp files written here.
 FORMAT = "exactgrasp.grasp/1"
 
 
@@ -163,19 +173,41 @@ class Grasp:
             raise GraspFileError(f"{path}: not valid JSON ({exc}).") from exc
         if not isinstance(data, dict):
             raise GraspFileError(f"{path}: expected a JSON object at the top level.")
-        return cls.from_dict(data, base_dir=path.parent, source=str(path), **overrides)
+        # An absolute folder: paths read from the file stay valid if the working folder changes.
+        base_dir = path.parent.resolve()
+        return cls.from_dict(data, base_dir=base_dir, source=str(path), **overrides)
 
     @classmethod
     def from_dict(
         cls, data: dict, base_dir: str | os.PathLike = ".", source: str = "<dict>", **overrides
     ) -> Grasp:
-        """Build from the parsed JSON (paths resolved against ``base_dir``)."""
-        from exactgrasp.grasp.files import read_hand, read_object
+        """Build from the parsed JSON (paths resolved against ``base_dir``).
 
+        Parameters
+        ----------
+        data : dict
+            A grasp file's content (see ``docs/grasp-file.md``).
+        base_dir : path-like
+            Folder the file's paths are relative to.
+        source : str
+            The file, for messages.
+        **overrides
+            As `from_file`.
+
+        Returns
+        -------
+        Grasp
+
+        Raises
+        ------
+        GraspFileError
+            Keys that break the schema (unknown, missing, wrong type), missing files, and
+            objects or hand models that cannot be read (naming the key and the fix).
+        JointError
+            Joint values the hand refuses.
+        """
         base_dir = Path(base_dir)
-        for key in ("object", "object_pose_in_hand"):
-            if key not in data:
-                raise GraspFileError(f"{source}: missing required key {key!r}.")
+        check_grasp_data(data, source)
         obj = read_object(data, base_dir, source, overrides)
         hand = read_hand(data, base_dir, source, overrides)
         pose = check_pose(data["object_pose_in_hand"], f"{source}: object_pose_in_hand")
@@ -191,8 +223,6 @@ class Grasp:
         sidecar_stem : str
             Stem for mesh files written for in-memory geometry.
         """
-        from exactgrasp.grasp.files import write_hand, write_object
-
         base_dir = Path(base_dir)
         data: dict[str, Any] = {"format": FORMAT, "name": self.name}
         data.update(write_object(self.object, base_dir, sidecar_stem))

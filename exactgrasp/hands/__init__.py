@@ -1,23 +1,40 @@
-"""Built-in hand models, available without downloading anything."""
+"""Hands: models (rigid meshes, MJCF/URDF through MuJoCo), posed hands, built-in hands.
 
-from collections.abc import Callable
+``eg.hands.barrett()`` builds the built-in Barrett hand, ``eg.hands.parallel_gripper()`` the
+built-in parallel-jaw gripper; `load_model` compiles a model file (URDF or MJCF as robotics
+packages ship them: ``package://`` mesh names, scenes with ``root_body=``).
+Modules here import `exactgrasp.errors`, `exactgrasp.cache`, `exactgrasp.geometry` and each
+other (never grasps, paths or backends).
+"""
 
 from exactgrasp.hands.barrett import barrett, barrett_model
+from exactgrasp.hands.builtins import BUILTIN_HANDS, available_hands, get_builtin
+from exactgrasp.hands.frame import HandFrame
+from exactgrasp.hands.gripper import parallel_gripper, parallel_gripper_model
+from exactgrasp.hands.hand import Hand, HandModel, RigidModel
+from exactgrasp.hands.joints import JOINT_LIMIT_TOL
+from exactgrasp.hands.loading import load_model
+from exactgrasp.hands.model import KinematicModel
+from exactgrasp.hands.palm import PalmSpec
 
-#: Built-in hands by name (the ``"builtin"`` hand type of grasp files).
-BUILTIN_HANDS: dict[str, Callable] = {"barrett": barrett}
+#: The old name of `get_builtin`.
+get = get_builtin
 
-
-def get(name: str) -> Callable:
-    """The constructor of a built-in hand by name (e.g. ``"barrett"``)."""
-    from exactgrasp.errors import ModelError
-
-    try:
-        return BUILTIN_HANDS[name]
-    except KeyError:
-        raise ModelError(
-            f"unknown built-in hand {name!r}; built-in hands: {sorted(BUILTIN_HANDS)}."
-        ) from None
-
-
-__all__ = ["BUILTIN_HANDS", "barrett", "barrett_model", "get"]
+__all__ = [
+    "BUILTIN_HANDS",
+    "JOINT_LIMIT_TOL",
+    "Hand",
+    "HandFrame",
+    "HandModel",
+    "KinematicModel",
+    "PalmSpec",
+    "RigidModel",
+    "available_hands",
+    "barrett",
+    "barrett_model",
+    "get",
+    "get_builtin",
+    "load_model",
+    "parallel_gripper",
+    "parallel_gripper_model",
+]

@@ -20,20 +20,23 @@ turn in opposite senses), so the user-facing spread joint is ``finger_1_prox_joi
 that also sets ``finger_2_prox_joint`` is accepted when both agree. The distal joints are
 independent by default, since the real hand's 12/35 distal/medial coupling breaks away on
 contact; ``distal_coupling=True`` couples them.
+
+Imports `exactgrasp.cache` and `exactgrasp.hands` hand, loading and model.
 """
 
 from __future__ import annotations
 
-from functools import lru_cache
-
-from exactgrasp.hands.model import KinematicModel, load_model
+from exactgrasp.cache import LRUCache
+from exactgrasp.hands.hand import Hand
+from exactgrasp.hands.loading import load_model
+from exactgrasp.hands.model import KinematicModel
 
 __all__ = ["BARRETT_MJCF", "BARRETT_PALM", "DISTAL_RATIO", "barrett", "barrett_model"]
 
 #: Distal/medial ratio of the real hand's built-in finger coupling.
 DISTAL_RATIO = 12.0 / 35.0
 
-#: The built-in hand's palm frame, read by `exactgrasp.hands.model.load_model` from the site.
+#: The built-in hand's palm frame, read by `exactgrasp.hands.loading.load_model` from the site.
 BARRETT_PALM = {"site": "palm_face", "normal": "+z", "up": "+y", "depth": 0.085}
 
 _FINGER_12 = """
@@ -77,8 +80,10 @@ BARRETT_MJCF = f"""<mujoco model="barrett_builtin">
 </mujoco>
 """
 
+#: Compiled models by (distal_coupling, tessellation).
+_MODELS = LRUCache(8)
 
-@lru_cache(maxsize=8)
+
 def barrett_model(distal_coupling: bool = False, tessellation: int = 32) -> KinematicModel:
     """The built-in Barrett hand as a `KinematicModel` (compiled once, then cached).
 
@@ -101,12 +106,15 @@ def barrett_model(distal_coupling: bool = False, tessellation: int = 32) -> Kine
         if distal_coupling
         else None
     )
-    return load_model(
-        "barrett_builtin.xml",
-        xml=BARRETT_MJCF,
-        palm=BARRETT_PALM,
-        couplings=couplings,
-        tessellation=tessellation,
+    return _MODELS.get(
+        (distal_coupling, tessellation),
+        lambda: load_model(
+            "barrett_builtin.xml",
+            xml=BARRETT_MJCF,
+            palm=BARRETT_PALM,
+            couplings=couplings,
+            tessellation=tessellation,
+        ),
     )
 
 
@@ -116,7 +124,7 @@ def barrett(
     distal_coupling: bool = False,
     tessellation: int = 32,
     **hand_kwargs,
-):
+) -> Hand:
     """The built-in three-finger Barrett hand, posed.
 
     Parameters
@@ -134,8 +142,6 @@ def barrett(
     exactgrasp.hands.hand.Hand
         With the hand's palm frame unless ``frame=`` is given.
     """
-    from exactgrasp.hands.hand import Hand
-
     model = barrett_model(bool(distal_coupling), int(tessellation))
     source = {
         "type": "builtin",

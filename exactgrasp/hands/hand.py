@@ -1,12 +1,17 @@
 """Hands: posed link meshes, joints, and the canonical frame.
 
-A `Hand` wraps a kinematic model (a rigid set of meshes, or an MJCF/URDF model compiled by
+A `Hand` wraps a hand model (a `RigidModel` of fixed meshes, or an MJCF/URDF model compiled by
 mujoco, see `exactgrasp.hands.model`) at one joint configuration, with its `HandFrame`. Its volume
 is the volume of the UNION of its links: real link meshes overlap and an overlap is hand once.
+`HandModel` is what a Hand needs of its model.
+
+Imports `exactgrasp.errors`, `exactgrasp.geometry` (manifold, solid) and `exactgrasp.hands`
+frame, loading and noise.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 from collections.abc import Sequence
 from functools import cached_property
@@ -16,13 +21,17 @@ from typing import Any, Protocol
 import numpy as np
 import trimesh
 
-from exactgrasp.errors import JointError, MeshError
+from exactgrasp.errors import FrameError, JointError, MeshError
 from exactgrasp.geometry.manifold import union_volume
 from exactgrasp.geometry.solid import Solid
-from exactgrasp.hands.frame import FrameError, HandFrame
+from exactgrasp.hands.frame import HandFrame
+from exactgrasp.hands.loading import jsonable, load_model_cached
+from exactgrasp.hands.noise import joint_noise
+
+__all__ = ["Hand", "HandModel", "RigidModel"]
 
 
-class KinematicModel(Protocol):
+class HandModel(Protocol):
     """What a `Hand` needs of a model (see `exactgrasp.hands.model.KinematicModel`)."""
 
     name: str
@@ -74,8 +83,9 @@ class Hand:
 
     Parameters
     ----------
-    model : KinematicModel
-        Rigid meshes or an articulated model.
+    model : HandModel
+        Rigid meshes (`RigidModel`) or an articulated model
+        (`exactgrasp.hands.model.KinematicModel`).
     joints : dict of str to float, optional
         Joint values (rad, or m for slide joints); missing joints take the model's defaults.
     frame : HandFrame, optional
@@ -88,7 +98,7 @@ class Hand:
 
     def __init__(
         self,
-        model: KinematicModel,
+        model: HandModel,
         joints: dict[str, float] | None = None,
         frame: HandFrame | None = None,
         on_limit: str = "error",
@@ -188,27 +198,55 @@ class Hand:
         joints: dict[str, float] | None = None,
         frame: HandFrame | None = None,
         on_limit: str = "error",
-        **model_kwargs: Any,
+        *,
+        root_body: str | None = None,
+        geometry: str | None = None,
+        tessellation: int | None = None,
+        palm: Any = None,
+        couplings: dict | None = None,
+        package_dirs: Any = None,
+        repair: bool | None = None,
     ) -> Hand:
-        """An articulated hand from an MJCF model, compiled by mujoco.
+        """An articulated hand from an MJCF or URDF model, compiled by mujoco.
+
+        ``Hand.from_urdf`` is the same constructor. The model options are those of
+        `exactgrasp.hands.loading.load_model`; None leaves an option at its default (and out
+        of ``Hand.source``, which `Grasp.save` writes as ``hand_options``).
 
         Parameters
         ----------
         path : path-like
         joints : dict, optional
         frame : HandFrame, optional
-            Defaults to the model's palm frame (see `exactgrasp.hands.model.load_model`).
+            Defaults to the model's palm frame (see `exactgrasp.hands.loading.load_model`).
         on_limit : {"error", "clip"}
-        **model_kwargs
-            `exactgrasp.hands.model.load_model` options: ``root_body``, ``geometry``,
-            ``tessellation``, ``palm``, ``couplings``.
+        root_body : str, optional
+            The hand's root body in a scene file.
+        geometry : {"collision", "visual", "all"}, optional
+        tessellation : int, optional
+        palm : PalmSpec, dict or False, optional
+        couplings : dict, optional
+        package_dirs : dict or list of paths, optional
+            Where ``package://NAME/...`` and ``model://NAME/...`` mesh names are found.
+        repair : bool, optional
+            Repair open mesh geoms of the hand (with a warning per geom).
 
         Returns
         -------
         Hand
         """
-        model = _load_model_cached(Path(path), model_kwargs)
-        source = {"type": "model", "path": str(Path(path)), "options": _jsonable(model_kwargs)}
+        given = {
+            "root_body": root_body,
+            "geometry": geometry,
+            "tessellation": tessellation,
+            "palm": palm,
+            "couplings": couplings,
+            "package_dirs": package_dirs,
+            "repair": repair,
+        }
+        options = {k: v for k, v in given.items() if v is not None}
+        model = load_model_cached(Path(path), options)
+        source = {"type": "model", "path": str(Path(path)), "options": jsonable(options)}
         return cls(model, joints=joints, frame=frame, on_limit=on_limit, source=source)
 
     from_urdf = from_mjcf
@@ -251,7 +289,7 @@ class Hand:
     def perturb_joints(self, fraction: float, rng: Any = None) -> Hand:
         """A copy with every joint moved by noise of ``fraction`` of its range.
 
-        See `exactgrasp.grasp.noise.joint_noise` for the distribution; values are clipped to the
+        See `exactgrasp.hands.noise.joint_noise` for the distribution; values are clipped to the
         limits.
 
         Parameters
@@ -264,8 +302,6 @@ class Hand:
         -------
         Hand
         """
-        from exactgrasp.grasp.noise import joint_noise
-
         return self.with_joints(joint_noise(self, fraction, rng), on_limit="clip")
 
     # -- geometry -----------------------------------------------------------------------------
@@ -305,8 +341,6 @@ class Hand:
     @cached_property
     def geometry_hash(self) -> str:
         """SHA-256 of the posed link arrays and the frame (hex)."""
-        import hashlib
-
         digest = hashlib.sha256()
         for v, f in self.link_arrays():
             digest.update(np.ascontiguousarray(v).tobytes())
@@ -317,39 +351,6 @@ class Hand:
     def __repr__(self) -> str:
         joints = ", ".join(f"{k}={v:.4g}" for k, v in self.joints.items())
         return f"Hand({self.model.name!r}, {len(self._posed_links)} links, joints: {{{joints}}})"
-
-
-#: Compiled file models, keyed by file identity and options: reading many grasps of one hand
-#: (34 cereal-box grasps, a batch) compiles its URDF once, not once per grasp.
-_MODEL_CACHE: dict[tuple, Any] = {}
-_MODEL_CACHE_SIZE = 8
-
-
-def _file_identity(path: Path) -> tuple:
-    try:
-        stat = path.stat()
-    except OSError:
-        return (str(path), None)
-    return (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
-
-
-def _load_model_cached(path: Path, options: dict) -> KinematicModel:
-    """`exactgrasp.hands.model.load_model`, memoised while the file (and its palm_frame.json) is
-    unchanged. Models are shared read-only: a Hand never changes its model."""
-    import json
-
-    from exactgrasp.hands.model import load_model
-
-    key = (
-        _file_identity(path),
-        _file_identity(path.parent / "palm_frame.json"),
-        json.dumps(_jsonable(options), sort_keys=True, default=repr),
-    )
-    if key not in _MODEL_CACHE:
-        if len(_MODEL_CACHE) >= _MODEL_CACHE_SIZE:
-            _MODEL_CACHE.pop(next(iter(_MODEL_CACHE)))
-        _MODEL_CACHE[key] = load_model(path, **options)
-    return _MODEL_CACHE[key]
 
 
 def _frame_from_palm(palm: Any) -> HandFrame:
@@ -371,14 +372,3 @@ def _as_solid(mesh: Any, units: str, name: str) -> Solid:
         f"link {name}: expected a trimesh.Trimesh, a Solid or a (vertices, faces) pair, got "
         f"{type(mesh).__name__}."
     )
-
-
-def _jsonable(options: dict) -> dict:
-    out = {}
-    for key, value in options.items():
-        if hasattr(value, "__dataclass_fields__"):
-            value = {k: getattr(value, k) for k in value.__dataclass_fields__}
-        elif isinstance(value, HandFrame):
-            value = value.to_dict()
-        out[key] = value
-    return out

@@ -1,200 +1,63 @@
-"""Compiling hand models with MuJoCo: URDF rewriting, mesh welding, palm frames, `load_model`.
+"""Loading hand models: `load_model` (MJCF or URDF through MuJoCo) and the model cache.
 
-The compile side of `exactgrasp.hands.model` (split off to keep each module to one idea): turn an
-MJCF or URDF file into a `exactgrasp.hands.model.KinematicModel`, with every geom a welded, closed
-mesh and the palm frame resolved into hand coordinates.
+`load_model` compiles a file into an `exactgrasp.hands.model.KinematicModel` with every geom a
+welded, closed mesh and the palm frame resolved into hand coordinates; `load_model_cached`
+keeps the last compiled models while their files are unchanged.
+
+Mesh URIs (``package://``, ``model://``) are resolved before MuJoCo reads the file
+(`exactgrasp.hands.packages`). Imports `exactgrasp.errors`, `exactgrasp.cache`,
+`exactgrasp.geometry.files` and `exactgrasp.hands` frame, model, packages and palm.
 """
 
 from __future__ import annotations
 
 import json
-import math
+import os
 import re
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
-import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
+from exactgrasp.cache import LRUCache
+from exactgrasp.errors import ModelError
+from exactgrasp.geometry.files import file_identity
+from exactgrasp.hands.frame import HandFrame
+from exactgrasp.hands.model import KinematicModel
+from exactgrasp.hands.packages import PackageResolver, package_env, rewrite_spec, rewrite_urdf
+from exactgrasp.hands.palm import PalmSpec, resolve_palm
 
-from exactgrasp.errors import MeshError, ModelError, require, warn_caller
-from exactgrasp.geometry import primitives
-from exactgrasp.geometry.shells import resolve_shells
+__all__ = [
+    "MODEL_CACHE_SIZE",
+    "PalmSpec",
+    "compile_model",
+    "compile_source",
+    "jsonable",
+    "load_model",
+    "load_model_cached",
+    "urdf_for_mujoco",
+]
 
-if TYPE_CHECKING:
-    from exactgrasp.hands.model import KinematicModel
-
-__all__ = ["PalmSpec", "load_model"]
-
-_PLANE, _HFIELD, _SPHERE, _CAPSULE, _ELLIPSOID, _CYLINDER, _BOX, _MESH = range(8)
-_GEOM_KIND = {0: "plane", 1: "hfield", 2: "sphere", 3: "capsule", 4: "ellipsoid"}
-_GEOM_KIND.update({5: "cylinder", 6: "box", 7: "mesh", 8: "sdf"})
-_FREE, _BALL, _SLIDE, _HINGE = range(4)
-_AXES = {"+x": 0, "x": 0, "+y": 1, "y": 1, "+z": 2, "z": 2, "-x": -1, "-y": -2, "-z": -3}
-
-
-@dataclass(frozen=True)
-class PalmSpec:
-    """A palm frame in hand (root body) coordinates.
-
-    Attributes
-    ----------
-    origin : tuple of 3 float
-        A point on the palm face (metres).
-    normal : tuple of 3 float
-        Unit vector out of the palm (the approach direction).
-    up : tuple of 3 float
-        Unit vector along the palm, perpendicular to ``normal`` (e.g. towards the thumb).
-    depth : float
-        Palm-to-closed-fingertip distance d (metres), > 0.
-    """
-
-    origin: tuple
-    normal: tuple
-    up: tuple
-    depth: float
-
-    def __post_init__(self):
-        origin = np.asarray(self.origin, dtype=np.float64).reshape(-1)
-        normal = np.asarray(self.normal, dtype=np.float64).reshape(-1)
-        up = np.asarray(self.up, dtype=np.float64).reshape(-1)
-        if origin.shape != (3,) or normal.shape != (3,) or up.shape != (3,):
-            raise ModelError("palm origin, normal and up must each have 3 coordinates")
-        if not (np.all(np.isfinite([*origin, *normal, *up])) and math.isfinite(self.depth)):
-            raise ModelError("palm origin, normal, up and depth must be finite numbers")
-        if np.linalg.norm(normal) == 0 or np.linalg.norm(up) == 0:
-            raise ModelError("palm normal and up must be non-zero vectors")
-        normal, up = normal / np.linalg.norm(normal), up / np.linalg.norm(up)
-        if abs(normal @ up) > 1e-6:
-            raise ModelError(
-                f"palm up {up.tolist()} is not perpendicular to normal "
-                f"{normal.tolist()} (dot = {normal @ up:.3g})"
-            )
-        if not self.depth > 0:
-            raise ModelError(f"palm depth must be > 0 (metres), got {self.depth!r}")
-        object.__setattr__(self, "origin", tuple(origin.tolist()))
-        object.__setattr__(self, "normal", tuple(normal.tolist()))
-        object.__setattr__(self, "up", tuple(up.tolist()))
-        object.__setattr__(self, "depth", float(self.depth))
+#: Compiled file models kept by `load_model_cached`: reading many grasps of one hand (34
+#: cereal-box grasps, a batch) compiles its URDF once, not once per grasp.
+MODEL_CACHE_SIZE = 8
+_MODELS = LRUCache(MODEL_CACHE_SIZE)
 
 
-def _weld(V: np.ndarray, F: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
-    """Merge duplicate vertices, drop collapsed faces, check the mesh is closed, and resolve
-    its shells (`exactgrasp.geometry.shells.resolve_shells`: overlapping shells merged with a
-    warning, a self-crossing shell refused with a `ModelError`).
-
-    MuJoCo keeps vertices split where normals differ and stores them in float32, so a closed
-    mesh file comes out of a compiled model open: copies of one vertex are identical or a
-    float32 rounding apart. Vertices within two float32 spacings of each other (7.5e-9 m for
-    coordinates under 0.125 m) are merged; genuine features are far larger (the real Barrett
-    palm has distinct vertices 3.4e-8 m apart, which a 1e-8-grid rounding would keep too).
-    """
-    V, inverse = np.unique(np.asarray(V, dtype=np.float64), axis=0, return_inverse=True)
-    F = inverse.reshape(-1)[np.asarray(F, dtype=np.int64)]
-    eps = 2.0 * float(np.spacing(np.float32(np.abs(V).max() if len(V) else 1.0)))
-    pairs = cKDTree(V).query_pairs(eps, output_type="ndarray")
-    if len(pairs):
-        graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), (len(V),) * 2)
-        _, label = connected_components(graph, directed=False)
-        first = np.full(label.max() + 1, len(V))
-        np.minimum.at(first, label, np.arange(len(V)))
-        V, F = V[first], label[F]
-    F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])]
-    if len(F) == 0:
-        raise ModelError(f"{what} has no faces")
-    edges = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    key = edges[:, 0] * len(V) + edges[:, 1]
-    reverse = edges[:, 1] * len(V) + edges[:, 0]
-    if len(np.unique(key)) != len(key) or not np.isin(reverse, key).all():
-        raise ModelError(
-            f"{what} is not a closed, consistently oriented surface even after merging "
-            "duplicate vertices; repair the mesh file (e.g. trimesh.repair or pymeshfix) "
-            "or use a primitive geom instead"
-        )
-    try:
-        # Once per mesh asset, at compile time: posing moves links rigidly, so a resolved
-        # link stays resolved in every joint configuration.
-        V, F, _ = resolve_shells(V, F, what, orientation="flip", warn=warn_caller)
-    except MeshError as exc:
-        raise ModelError(str(exc)) from None
-    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    if np.einsum("ij,ij->", a, np.cross(b, c)) < 0:
-        warn_caller(f"{what} is inside-out (negative volume); its faces were flipped")
-        F = F[:, ::-1].copy()
-    return V, F
-
-
-def _geom_mesh(mj_model, g: int, tessellation: int, what: str):
-    """Closed mesh of geom ``g`` in the geom's own frame."""
-    kind, size = int(mj_model.geom_type[g]), mj_model.geom_size[g]
-    if kind == _MESH:
-        k = int(mj_model.geom_dataid[g])
-        va, vn = mj_model.mesh_vertadr[k], mj_model.mesh_vertnum[k]
-        fa, fn = mj_model.mesh_faceadr[k], mj_model.mesh_facenum[k]
-        return _weld(mj_model.mesh_vert[va : va + vn], mj_model.mesh_face[fa : fa + fn], what)
-    if kind == _BOX:
-        return primitives.box(size)
-    if kind == _SPHERE:
-        return primitives.sphere(size[0], tessellation)
-    if kind == _CAPSULE:
-        return primitives.capsule(size[0], size[1], tessellation)
-    if kind == _CYLINDER:
-        return primitives.cylinder(size[0], size[1], tessellation)
-    return primitives.ellipsoid(size[:3], tessellation)
-
-
-def _axis(value, R: np.ndarray, what: str) -> np.ndarray:
-    """An axis given as "+z"/"-y"/... of frame ``R`` or as a vector in that frame."""
-    if isinstance(value, str):
-        key = value.strip().lower()
-        if key not in _AXES:
-            raise ModelError(
-                f"palm {what} {value!r}: use one of +x, -x, +y, -y, +z, -z or a 3-vector"
-            )
-        i = _AXES[key]
-        return R[:, i] if i >= 0 else -R[:, -i - 1]
-    return R @ np.asarray(value, dtype=np.float64).reshape(3)
-
-
-def _resolve_palm(model: KinematicModel, palm) -> PalmSpec | None:
-    """Turn a `PalmSpec`, a dict (optionally naming a body or site) or None into a PalmSpec."""
-    if palm is None or isinstance(palm, PalmSpec):
-        return palm
-    if not isinstance(palm, Mapping):
-        raise ModelError(f"palm must be a PalmSpec or a dict, got {type(palm)}")
-    unknown = set(palm) - {"body", "site", "origin", "normal", "up", "depth", "note"}
-    missing = {"normal", "up", "depth"} - set(palm)
-    if unknown or missing or ("body" in palm and "site" in palm):
-        raise ModelError(
-            f"palm dict {dict(palm)}: expected keys normal, up, depth, optional origin and "
-            "one of body/site (axes and origin are then in that frame); "
-            f"unknown {sorted(unknown)}, missing {sorted(missing)}"
-        )
-    R, p = np.eye(3), np.zeros(3)
-    for kind in ("body", "site"):
-        if kind in palm:  # evaluated at the default joints
-            R, p = model.frame_in_hand(kind, palm[kind])
-    origin = p + R @ np.asarray(palm.get("origin", (0.0, 0.0, 0.0)), dtype=np.float64)
-    return PalmSpec(
-        origin, _axis(palm["normal"], R, "normal"), _axis(palm["up"], R, "up"), palm["depth"]
-    )
-
-
-def _urdf_for_mujoco(path: Path, geometry: str) -> str:
+def urdf_for_mujoco(path: Path, geometry: str, resolver: PackageResolver | None = None) -> str:
     """The URDF text with the compiler settings this module relies on.
 
     Static links stay bodies (``fusestatic="false"``) so that every link keeps its name,
-    visual geoms are kept unless only collision geometry is wanted, and the mesh directory is
-    made absolute because the text is compiled from a string.
+    visual geoms are kept unless only collision geometry is wanted, the mesh directory is
+    made absolute because the text is compiled from a string, and ``package://`` /
+    ``model://`` / ``file://`` mesh names are replaced by the files ``resolver`` finds
+    (`exactgrasp.hands.packages`), since MuJoCo reads none of them.
     """
     try:
         robot = ET.parse(path).getroot()
     except ET.ParseError as exc:
         raise ModelError(f"{path}: not a readable URDF ({exc})") from None
+    resolver = resolver or PackageResolver(path)
+    rewritten = rewrite_urdf(robot, resolver, keep_visual=geometry != "collision")
     ext = robot.find("mujoco")
     if ext is None:
         ext = ET.SubElement(robot, "mujoco")
@@ -204,14 +67,36 @@ def _urdf_for_mujoco(path: Path, geometry: str) -> str:
     compiler.set("meshdir", str((path.parent / compiler.get("meshdir", ".")).resolve()))
     compiler.set("fusestatic", "false")
     compiler.set("discardvisual", "true" if geometry == "collision" else "false")
+    if rewritten:  # the resolved names are absolute paths: they must reach MuJoCo whole
+        compiler.set("strippath", "false")
     return ET.tostring(robot, encoding="unicode")
 
 
-def _compile(mujoco, source: str, *, path: Path | None = None, xml: str | None = None):
+def compile_model(mujoco, source: str, *, path: Path | None = None, xml: str | None = None):
+    """``mujoco.MjModel`` from a file or from text, with compile errors as `ModelError`.
+
+    Parameters
+    ----------
+    mujoco : module
+    source : str
+        The model file, for messages.
+    path : pathlib.Path, optional
+        The file to compile (when ``xml`` is None).
+    xml : str, optional
+        Model text to compile instead.
+
+    Returns
+    -------
+    mujoco.MjModel
+    """
+    if xml is not None:
+        return _compiled(source, lambda: mujoco.MjModel.from_xml_string(xml))
+    return _compiled(source, lambda: mujoco.MjModel.from_xml_path(str(path)))
+
+
+def _compiled(source: str, build):
     try:
-        if xml is not None:
-            return mujoco.MjModel.from_xml_string(xml)
-        return mujoco.MjModel.from_xml_path(str(path))
+        return build()
     except ValueError as exc:
         missing = re.search(r"[Ee]rror opening file '([^']+)'", str(exc))
         if missing:
@@ -223,6 +108,55 @@ def _compile(mujoco, source: str, *, path: Path | None = None, xml: str | None =
         raise ModelError(f"{source}: mujoco cannot compile the model: {exc}") from None
 
 
+def compile_source(
+    path,
+    *,
+    geometry: str = "collision",
+    package_dirs=None,
+    xml: str | None = None,
+):
+    """Compile an MJCF or URDF file (or MJCF text) with its mesh URIs resolved.
+
+    Parameters
+    ----------
+    path : str or Path
+        The model file; for ``xml=`` a name used in messages.
+    geometry : {"collision", "visual", "all"}
+        For a URDF: whether its ``<visual>`` meshes are compiled too.
+    package_dirs : mapping or sequence of paths, optional
+        See `exactgrasp.hands.packages.PackageResolver`.
+    xml : str, optional
+        MJCF text to compile instead of reading ``path``.
+
+    Returns
+    -------
+    mujoco.MjModel
+    """
+    import mujoco  # here, not at the top: importing exactgrasp stays light
+
+    path = Path(path)
+    source = str(path)
+    if xml is None and not path.is_file():
+        raise ModelError(f"hand model file {source!r} does not exist")
+    resolver = PackageResolver(path, package_dirs, source)
+    if path.suffix.lower() == ".urdf":
+        if xml is not None:
+            raise ModelError("xml= takes MJCF text; load a URDF from its file")
+        return compile_model(mujoco, source, xml=urdf_for_mujoco(path, geometry, resolver))
+    # MjSpec parses without reading assets, so URI file names can be replaced first.
+    spec = _compiled(
+        source,
+        lambda: (
+            mujoco.MjSpec.from_string(xml)
+            if xml is not None
+            else mujoco.MjSpec.from_file(str(path))
+        ),
+    )
+    if rewrite_spec(spec, resolver):
+        return _compiled(source, spec.compile)
+    return compile_model(mujoco, source, path=path, xml=xml)
+
+
 def load_model(
     path,
     *,
@@ -231,6 +165,8 @@ def load_model(
     tessellation: int = 32,
     palm=None,
     couplings=None,
+    package_dirs=None,
+    repair: bool = False,
     xml: str | None = None,
 ) -> KinematicModel:
     """Compile an MJCF (.xml) or URDF (.urdf) hand model with MuJoCo.
@@ -241,7 +177,9 @@ def load_model(
         The model file; for ``xml=`` a name used in messages (and ``.urdf`` or not).
     root_body : str, optional
         The hand's root body; only its subtree is the hand, and link meshes come out in its
-        frame. Default: the whole model, in the world frame (= the URDF base link's frame).
+        frame. Default: the whole model, in the world frame (= the URDF base link's frame);
+        a model with several top-level bodies carrying geometry (a scene) is refused with
+        the candidates listed (see `exactgrasp.hands.scene`).
     geometry : {"collision", "visual", "all"}
         Which geoms make up the hand. Visual geoms are those that collide with nothing
         (``contype = conaffinity = 0``, MuJoCo's convention and its URDF import's).
@@ -257,6 +195,15 @@ def load_model(
         ``{dependent joint: (driver joint, ratio[, offset])}``: the dependent joint is set to
         ``offset + ratio * driver`` and is not a user-facing joint. Added to (and overriding)
         the model's own linear ``<equality><joint>`` constraints.
+    package_dirs : dict or list of paths, optional
+        Where ``package://NAME/...`` and ``model://NAME/...`` mesh names are found:
+        ``{NAME: folder}``, or folders that are or hold packages. Searched before
+        ``ROS_PACKAGE_PATH`` and the model file's folder and its parents (see
+        `exactgrasp.hands.packages`).
+    repair : bool
+        Repair mesh geoms of the hand that are not closed solids (as ``Solid(repair=True)``:
+        merge vertices, fix winding, fill holes), with one warning listing each repaired
+        geom with its volume before and after. Only geoms of the hand's subtree are checked.
     xml : str, optional
         Model text to compile instead of reading ``path`` (for bundled MJCF models).
 
@@ -264,38 +211,75 @@ def load_model(
     -------
     KinematicModel
     """
-    from exactgrasp.hands.model import KinematicModel
-
-    mujoco = require("mujoco", "articulated hand models (MJCF/URDF)", extra="all")
     if geometry not in ("collision", "visual", "all"):
         raise ModelError(f"geometry must be 'collision', 'visual' or 'all', got {geometry!r}")
     if isinstance(tessellation, bool) or int(tessellation) != tessellation or tessellation < 4:
         raise ModelError(f"tessellation must be an integer >= 4, got {tessellation!r}")
+    if not isinstance(repair, bool):
+        raise ModelError(f"repair must be True or False, got {repair!r}")
     path = Path(path)
-    source = str(path)
-    is_urdf = path.suffix.lower() == ".urdf"
-    if xml is None and not path.is_file():
-        raise ModelError(f"hand model file {source!r} does not exist")
-    if is_urdf:
-        if xml is not None:
-            raise ModelError("xml= takes MJCF text; load a URDF from its file")
-        mj_model = _compile(mujoco, source, xml=_urdf_for_mujoco(path, geometry))
-    else:
-        mj_model = _compile(mujoco, source, path=path, xml=xml)
+    mj_model = compile_source(path, geometry=geometry, package_dirs=package_dirs, xml=xml)
     name = bytes(mj_model.names).split(b"\0", 1)[0].decode() or path.stem
     model = KinematicModel(
         mj_model,
         name=name,
-        source=source,
+        source=str(path),
         root_body=root_body,
         geometry=geometry,
         tessellation=int(tessellation),
         couplings=couplings,
+        repair=repair,
     )
     if palm is None and xml is None and (path.parent / "palm_frame.json").is_file():
         try:
             palm = json.loads((path.parent / "palm_frame.json").read_text())
         except (OSError, ValueError) as exc:
             raise ModelError(f"{path.parent / 'palm_frame.json'}: unreadable ({exc})") from None
-    model.palm = _resolve_palm(model, palm or None)
+    model.palm = resolve_palm(model, palm or None)
     return model
+
+
+def jsonable(options: dict[str, Any]) -> dict[str, Any]:
+    """`load_model` options as JSON values (`PalmSpec` and other dataclasses, frames: dicts,
+    paths: strings)."""
+    return {key: _jsonable(value) for key, value in options.items()}
+
+
+def _jsonable(value: Any) -> Any:
+    if hasattr(value, "__dataclass_fields__"):
+        return {k: getattr(value, k) for k in value.__dataclass_fields__}
+    if isinstance(value, HandFrame):
+        return value.to_dict()
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    return value
+
+
+def load_model_cached(path: Path, options: dict[str, Any]) -> KinematicModel:
+    """`load_model` ``(path, **options)``, memoised while the file (and its palm_frame.json)
+    is unchanged.
+
+    Models are shared read-only: a Hand never changes its model.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The MJCF or URDF file.
+    options : dict
+        `load_model` keyword arguments.
+
+    Returns
+    -------
+    KinematicModel
+    """
+    key = (
+        file_identity(path),
+        file_identity(path.parent / "palm_frame.json"),
+        json.dumps(jsonable(options), sort_keys=True, default=repr),
+        tuple(sorted(package_env().items())),  # where package:// names resolve to
+    )
+    return _MODELS.get(key, lambda: load_model(path, **options))

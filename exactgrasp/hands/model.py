@@ -4,7 +4,11 @@ MuJoCo compiles both formats, so one code path serves both. A `KinematicModel` k
 compiled model and every geom as a welded, closed mesh in the geom's own frame; posing the
 hand is then one ``mj_kinematics`` call and a rigid transform per geom. Link meshes are
 returned in the frame of the hand's root body (the URDF base link, or ``root_body=``), so
-where the hand stands in a scene file does not matter.
+where the hand stands in a scene file does not matter. Build one with
+`exactgrasp.hands.loading.load_model`.
+
+Imports `exactgrasp.errors`, `exactgrasp.hands` geoms, joints, palm and scene, numpy; mujoco is
+loaded on first use (it is a core dependency, but importing exactgrasp stays light).
 """
 
 from __future__ import annotations
@@ -14,44 +18,31 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from exactgrasp.errors import JointError, ModelError, require, warn_caller
-from exactgrasp.hands.loading import (
-    _GEOM_KIND,
-    _HFIELD,
-    _HINGE,
-    _MESH,
-    _PLANE,
-    _SLIDE,
-    PalmSpec,
-    _geom_mesh,
-    load_model,
-)
+from exactgrasp.errors import JointError, ModelError, warn_caller
+from exactgrasp.hands.geoms import JOINT_SLIDE, collect_geoms
+from exactgrasp.hands.joints import collect_joints
+from exactgrasp.hands.palm import PalmSpec
+from exactgrasp.hands.scene import hand_subtree
 
-__all__ = ["JOINT_LIMIT_TOL", "KinematicModel", "PalmSpec", "load_model"]
-
-
-#: Default slack on joint limits, radians for hinges (metres for slides: 1e-5). Recorded
-#: grasps sit a hair outside limits rounded in the model file (Barrett distal 0.837758 rad
-#: against a URDF limit of 0.837), so 1e-3 rad (0.06 degree) accepts rounding but nothing a
-#: person would call a different pose. Values inside the slack are kept as given, not clipped,
-#: so that forward kinematics reproduces the record exactly.
-JOINT_LIMIT_TOL = 1e-3
-_SLIDE_LIMIT_TOL = 1e-5
+__all__ = ["KinematicModel"]
 
 
 class KinematicModel:
     """A compiled articulated hand: user-facing joints, couplings and posable link meshes.
 
-    Build one with `load_model`. Attributes follow the library-wide contract: `name`,
-    `joint_names` (independent joints in model order), `joint_limits` (radians, or metres for
-    slide joints; ``(-inf, inf)`` when unlimited), `default_joints` (the model's reference
-    pose clipped into the limits), `palm` (`PalmSpec` or None), plus `couplings`
-    ``{dependent: (driver or None, ratio, offset)}`` and `link_names`.
+    Build one with `exactgrasp.hands.loading.load_model`. Attributes follow the library-wide
+    contract: `name`, `joint_names` (independent joints in model order), `joint_limits`
+    (radians, or metres for slide joints; ``(-inf, inf)`` when unlimited), `default_joints`
+    (the model's reference pose clipped into the limits), `palm` (`PalmSpec` or None), plus
+    `couplings` ``{dependent: (driver or None, ratio, offset)}`` and `link_names`.
     """
 
     #: Joints `exactgrasp.grasp.closing.close_fingers` closes by default (None: chosen by their
     #: axes, see there); set it on a model whose flexion joints the rule gets wrong.
     closing_joints: tuple[str, ...] | None = None
+    #: ``{joint: +1 | -1}``: the sense in which `close_fingers` closes a joint by default
+    #: (+1 towards its upper limit); joints not named are inferred (see there).
+    closing_directions: dict[str, int] | None = None
 
     def __init__(
         self,
@@ -63,96 +54,27 @@ class KinematicModel:
         geometry,
         tessellation,
         couplings,
+        repair=False,
     ):
-        self._mujoco = require("mujoco", "articulated hand models", extra="all")
+        import mujoco  # here, not at the top: importing exactgrasp stays light
+
+        self._mujoco = mujoco
         self._m = mj_model
         self.name, self.source, self.geometry = name, source, geometry
-        nb = mj_model.nbody
-        names = [mj_model.body(b).name for b in range(nb)]
+        names = [mj_model.body(b).name for b in range(mj_model.nbody)]
         self._body_names = names
-        if root_body is None:
-            self._root = 0
-        elif root_body in names:
-            self._root = names.index(root_body)
-        else:
-            raise ModelError(
-                f"{source}: root_body {root_body!r} is not a body of the model; "
-                f"bodies: {', '.join(names)}"
-            )
-        in_tree = np.zeros(nb, dtype=bool)
-        for b in range(nb):  # parents have smaller ids than children in a compiled model
-            in_tree[b] = b == self._root or (b > 0 and in_tree[mj_model.body_parentid[b]])
-        self._collect_joints(in_tree, couplings)
-        self._collect_geoms(in_tree, geometry, tessellation)
+        self._root, in_tree = hand_subtree(mj_model, root_body, geometry, source)
+        table = collect_joints(mj_model, in_tree, self._root, couplings, source)
+        self._joint_ids, self._tols = table.joint_ids, table.tols
+        self.couplings = table.couplings
+        self.joint_names = table.joint_names
+        self.joint_limits = table.joint_limits
+        self.default_joints = table.default_joints
+        # (link name, geom id, V local, F) per geom
+        self._geoms, self.link_names = collect_geoms(
+            mj_model, in_tree, self._root, names, geometry, tessellation, source, repair=repair
+        )
         self.palm: PalmSpec | None = None
-
-    # -- joints ---------------------------------------------------------------------------
-    def _collect_joints(self, in_tree, couplings):
-        m = self._m
-        hinge_slide, held = [], []
-        for j in range(m.njnt):
-            b = int(m.jnt_bodyid[j])
-            # Joints of the root body place it in the scene; meshes are in its frame anyway.
-            if not in_tree[b] or (b == self._root and self._root != 0):
-                continue
-            (hinge_slide if m.jnt_type[j] in (_HINGE, _SLIDE) else held).append(j)
-        if held:
-            warn_caller(
-                f"{self.source}: free/ball joints {[m.joint(j).name for j in held]} "
-                "are held at their initial pose (only hinge and slide joints are "
-                "exposed)"
-            )
-        self._joint_ids = {m.joint(j).name: j for j in hinge_slide}
-        eq = {}
-        for e in range(m.neq):  # MJCF <equality><joint>: joint1 = poly(joint2)
-            if m.eq_type[e] != 2 or not m.eq_active0[e]:
-                continue
-            dep, drv, coef = int(m.eq_obj1id[e]), int(m.eq_obj2id[e]), m.eq_data[e][:5]
-            if np.any(coef[2:] != 0):
-                warn_caller(
-                    f"{self.source}: non-linear joint equality on "
-                    f"{m.joint(dep).name} ignored (joint left independent)"
-                )
-                continue
-            eq[m.joint(dep).name] = (
-                m.joint(drv).name if drv >= 0 else None,
-                float(coef[1]),
-                float(coef[0]),
-            )
-        for dep, spec in (couplings or {}).items():
-            if isinstance(spec, str) or len(spec) not in (2, 3):
-                raise ModelError(
-                    f"coupling of {dep!r}: expected (driver, ratio) or "
-                    f"(driver, ratio, offset), got {spec!r}"
-                )
-            eq[dep] = (spec[0], float(spec[1]), float(spec[2]) if len(spec) == 3 else 0.0)
-        for dep, (driver, _, _) in eq.items():
-            for joint in (dep, driver):
-                if joint is not None and joint not in self._joint_ids:
-                    raise ModelError(
-                        f"{self.source}: coupling {dep!r} <- {driver!r} names "
-                        f"{joint!r}, not a hinge/slide joint of the hand"
-                    )
-            if driver in eq:
-                raise ModelError(
-                    f"{self.source}: coupling driver {driver!r} is itself "
-                    "coupled; chains of couplings are not supported"
-                )
-        self.couplings = eq
-        self.joint_names = tuple(n for n in self._joint_ids if n not in eq)
-        self.joint_limits = {}
-        for n in self.joint_names:
-            j = self._joint_ids[n]
-            lo, hi = m.jnt_range[j] if m.jnt_limited[j] else (-math.inf, math.inf)
-            self.joint_limits[n] = (float(lo), float(hi))
-        self._tols = {
-            n: _SLIDE_LIMIT_TOL if m.jnt_type[j] == _SLIDE else JOINT_LIMIT_TOL
-            for n, j in self._joint_ids.items()
-        }
-        self.default_joints = {
-            n: float(np.clip(m.qpos0[m.jnt_qposadr[self._joint_ids[n]]], *self.joint_limits[n]))
-            for n in self.joint_names
-        }
 
     def check_joints(
         self, joints: Mapping | None = None, on_limit: str = "error", tol: float | None = None
@@ -168,8 +90,8 @@ class KinematicModel:
             What to do with a value beyond a limit by more than ``tol``: raise `JointError`,
             or clip it to the limit with a warning.
         tol : float, optional
-            Slack on the limits; default `JOINT_LIMIT_TOL` (1e-3 rad) for hinges and 1e-5 m
-            for slides. Values inside the slack are kept unchanged.
+            Slack on the limits; default `exactgrasp.hands.joints.JOINT_LIMIT_TOL` (1e-3 rad)
+            for hinges and 1e-5 m for slides. Values inside the slack are kept unchanged.
 
         Returns
         -------
@@ -234,62 +156,6 @@ class KinematicModel:
         return full
 
     # -- geometry -------------------------------------------------------------------------
-    def _collect_geoms(self, in_tree, geometry, tessellation):
-        m = self._m
-        kept, outside, not_solid, other = [], [], [], 0
-        for g in range(m.ngeom):
-            b, kind = int(m.geom_bodyid[g]), int(m.geom_type[g])
-            label = (
-                f"{m.geom(g).name or f'geom {g}'} "
-                f"({_GEOM_KIND.get(kind, kind)} in {self._body_names[b]})"
-            )
-            visual = m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0
-            if geometry != "all" and visual != (geometry == "visual"):
-                other += 1
-            elif not in_tree[b]:
-                outside.append(label)
-            elif kind in (_PLANE, _HFIELD) or kind > _MESH:
-                not_solid.append(label)
-            else:
-                kept.append(g)
-        notes = []
-        if outside:
-            more = f" and {len(outside) - 6} more" if len(outside) > 6 else ""
-            notes.append(
-                f"outside root body {self._body_names[self._root]!r}: "
-                f"{', '.join(outside[:6])}{more}"
-            )
-        if not_solid:  # planes are infinite; height fields and SDFs are terrain or implicit
-            notes.append(f"not closed solids: {', '.join(not_solid)}")
-        if notes:
-            warn_caller(f"{self.source}: geoms left out of the hand: " + "; ".join(notes))
-        if not kept:
-            hint = (
-                f"; {other} geom(s) of the other kind exist: try geometry='all'" if other else ""
-            )
-            raise ModelError(
-                f"{self.source}: no {geometry} geometry in the hand's subtree "
-                f"(root {self._body_names[self._root]!r}){hint}"
-            )
-        per_body = {}
-        for g in kept:
-            per_body.setdefault(int(m.geom_bodyid[g]), []).append(g)
-        self._geoms = []  # (link name, geom id, V local, F)
-        welded = {}  # one weld per mesh asset, however many geoms use it
-        for b, gs in per_body.items():
-            for g in gs:
-                body = self._body_names[b]
-                name = body if len(gs) == 1 else f"{body}/{m.geom(g).name or g}"
-                what = f"{self.source}: mesh geom {m.geom(g).name or g!r} of body {body!r}"
-                key = int(m.geom_dataid[g]) if m.geom_type[g] == _MESH else None
-                if key is None or key not in welded:
-                    V, F = _geom_mesh(m, g, tessellation, what)
-                    if key is not None:
-                        welded[key] = V, F
-                V, F = welded[key] if key is not None else (V, F)
-                self._geoms.append((name, g, V, F))
-        self.link_names = tuple(entry[0] for entry in self._geoms)
-
     def _kinematics(self, joints: Mapping[str, float]):
         mj, m = self._mujoco, self._m
         data = mj.MjData(m)  # a fresh one per call keeps the model safe to share
@@ -371,7 +237,7 @@ class KinematicModel:
         m = self._m
         return {
             name: (
-                "slide" if m.jnt_type[j] == _SLIDE else "hinge",
+                "slide" if m.jnt_type[j] == JOINT_SLIDE else "hinge",
                 rot.T @ (data.xanchor[j] - pos),
                 rot.T @ data.xaxis[j],
             )

@@ -3,7 +3,11 @@
 A path is a constant body twist: unit translation velocity ``v`` along a direction and angular
 velocity ``omega = axis * amount``. The pose at time ``t`` is ``exp(t * twist)``. Directions and
 axes come from the spiral phyllotaxis pattern on the sphere; rotation amounts are spread evenly
-over the circle of angles. See ``docs/conventions.md`` for every choice made here.
+over the circle of angles. See ``docs/conventions.md`` for every choice made here. The named
+settings (`PRESETS`) are here beside `PathSampler.preset`; the coercion of user input into a
+sampler is `exactgrasp.paths.presets.as_sampler`.
+
+May import: `exactgrasp.errors`, `exactgrasp.geometry.se3`.
 """
 
 from __future__ import annotations

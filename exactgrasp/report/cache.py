@@ -3,6 +3,9 @@
 The file name is a hash of everything that determines the values, so a re-run, or a run that
 was interrupted, picks up what is already there, and a changed setting never reads a stale
 file.
+
+May import: `exactgrasp.paths`, `exactgrasp.grasp`, `exactgrasp.backends`,
+`exactgrasp.descriptor`.
 """
 
 from __future__ import annotations
@@ -14,7 +17,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from exactgrasp.backends import Backend, get_backend
+from exactgrasp.backends import Backend
+from exactgrasp.backends.registry import shared_backend
 from exactgrasp.descriptor import Descriptor, compute_descriptor
 from exactgrasp.grasp import Grasp
 from exactgrasp.paths.sampler import PathSampler
@@ -49,15 +53,12 @@ class DescriptorCache:
         self.loaded = 0
         self.compute_seconds: dict[str, float] = {}
         self._used: set[Path] = set()
-        self._backends: dict[str, Backend] = {}
 
     def backend(self, name: str, **params: Any) -> Backend:
-        """One backend instance per (name, parameters), so hand grids and object points that
+        """One backend instance per (name, parameters) in this process
+        (`exactgrasp.backends.registry.shared_backend`), so hand grids and object points that
         backends cache per geometry are reused across grasps."""
-        key = json.dumps([name, params], sort_keys=True)
-        if key not in self._backends:
-            self._backends[key] = get_backend(name, **params)
-        return self._backends[key]
+        return shared_backend(name, **params)
 
     def path(self, grasp: Grasp, backend: Backend, sampler: PathSampler) -> Path:
         """Where the descriptor of this grasp, backend and sampler lives."""

@@ -1,4 +1,7 @@
-"""How big a validation run is: every size in one place (paper, standard and quick)."""
+"""How big a validation run is: every size in one place (paper, standard and quick).
+
+May import: `exactgrasp.paths`.
+"""
 
 from __future__ import annotations
 

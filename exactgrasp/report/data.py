@@ -3,6 +3,8 @@
 Grasps come as `Case` records (a short name, the object, where it came from). Contact grasps
 on objects other than the cereal box are made from the raw human-study records with
 `exactgrasp.close_fingers`; a record it cannot repair is skipped and reported, never used.
+
+May import: `exactgrasp.errors`, `exactgrasp.geometry`, `exactgrasp.grasp`.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 from exactgrasp.errors import DataError, ExactGraspError
 from exactgrasp.geometry.manifold import to_manifold, union
 from exactgrasp.grasp import Grasp
+from exactgrasp.grasp.closing import close_fingers
 
 #: A closed grasp whose hand still overlaps its object by more than this fraction of the hand
 #: volume is not a contact grasp and is skipped.
@@ -182,8 +185,6 @@ def _records(barrett: Path, obj: str) -> list[Path]:
 
 def _close(grasp: Grasp) -> tuple[Any, np.ndarray, dict[str, Any]]:
     """Close the hand onto the object: (hand, object pose after any back-off, notes)."""
-    from exactgrasp.grasp.closing import close_fingers
-
     with warnings.catch_warnings():
         # A back-off is reported in the notes (and the report), not as a warning per record.
         warnings.simplefilter("ignore", UserWarning)

@@ -1,4 +1,7 @@
-"""Descriptor level: do the two backends agree on which grasps look alike?"""
+"""Descriptor level: do the two backends agree on which grasps look alike?
+
+May import: `exactgrasp.descriptor`.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""Run the whole validation: grasps, descriptors (cached), numbers, figures, report files."""
+"""Run the whole validation: grasps, descriptors (cached), numbers, figures, report files.
+
+May import: `exactgrasp.version`, `exactgrasp.backends` and every other `exactgrasp.report`
+module except `args` and `__main__`.
+"""
 
 from __future__ import annotations
 
@@ -30,6 +34,7 @@ from exactgrasp.report.findings import (
 )
 from exactgrasp.report.noise import joint_noise_test, object_noise_test
 from exactgrasp.report.write import write_html, write_json, write_markdown
+from exactgrasp.version import __version__
 
 
 def noise_cases(spray: Case, cereal: list[Case], closed: list[Case], n: int) -> list[Case]:
@@ -230,8 +235,6 @@ def run_validation(
 
     summary["findings"] = findings
     summary["headline"] = headline(summary)
-    from exactgrasp.version import __version__
-
     summary["meta"] = {
         "command": command,
         "data": str(Path(data_dir)),

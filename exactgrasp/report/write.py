@@ -1,4 +1,7 @@
-"""Writing the report: a JSON file of every summary number, a Markdown summary, an HTML page."""
+"""Writing the report: a JSON file of every summary number, a Markdown summary, an HTML page.
+
+May import: nothing from exactgrasp (it formats the report's numbers only).
+"""
 
 from __future__ import annotations
 

@@ -1,14 +1,14 @@
-"""The exact backend: certified intersection volumes, the plain boolean and the kernel."""
+"""The exact backend: certified intersection volumes, the plain boolean and the kernel.
 
-from exactgrasp.backends.exact.backend import (
-    FLOOR,
-    RTOL,
-    ExactBackend,
-    ExactIntersector,
-    agrees,
-    plain_volumes,
-    repeated_poses,
-)
+Modules by stage: `reference` (the plain boolean, the agreement rule), `intersector` (the
+array-level core), `backend` (the `Backend`), `tables` (the kernel's named tables), `grids` and
+`prepare` (built once per grasp), `pose` (the per-pose driver) with its stages `search`,
+`pairs`, `classify` and `sums`, on `cells` and `predicates`; every tolerance in `tolerances`.
+"""
+
+from exactgrasp.backends.exact.backend import ExactBackend
+from exactgrasp.backends.exact.intersector import ExactIntersector, repeated_poses
+from exactgrasp.backends.exact.reference import FLOOR, RTOL, agrees, plain_volumes
 
 __all__ = [
     "FLOOR",

@@ -1,16 +1,14 @@
 """The paper's voxel-count estimator: backend, hand grids, object points and the kernel."""
 
-from exactgrasp.backends.voxel.backend import (
-    HandOccupancy,
-    ObjectPoints,
-    VoxelBackend,
+from exactgrasp.backends.voxel.backend import VoxelBackend
+from exactgrasp.backends.voxel.grids import HandOccupancy, hand_occupancy
+from exactgrasp.backends.voxel.kernel import (
     estimate_counts,
     estimate_counts_numpy,
     estimate_volumes,
     estimate_volumes_numpy,
-    hand_occupancy,
-    object_points,
 )
+from exactgrasp.backends.voxel.points import ObjectPoints, object_points
 
 __all__ = [
     "HandOccupancy",

@@ -1,0 +1,34 @@
+"""Default values of the backends and of the code that picks them: the one place they are set.
+
+Imports nothing; the backends, `exactgrasp.descriptor`, `exactgrasp.compare`, the batch runner
+and the command line read their defaults from here.
+"""
+
+from __future__ import annotations
+
+#: Backend used when none is named (the paper's estimator).
+DEFAULT_BACKEND = "voxel"
+#: Backends compared when none are named; the last is the reference.
+COMPARED_BACKENDS = ("voxel", "exact")
+
+#: Voxels along the longest side of the hand's bounding box (the paper's value).
+VOXEL_HAND_RESOLUTION = 100
+#: Voxels along the longest side of the object's bounding box (the paper's value).
+VOXEL_OBJECT_RESOLUTION = 50
+#: Hand grids and object point sets a `VoxelBackend` keeps, each (least recently used first out).
+VOXEL_CACHE_SIZE = 8
+
+#: Library of the exact backend's broad phase (``"coal"``, ``"fcl"`` or None).
+EXACT_BROADPHASE = "coal"
+#: Threads over poses of the exact backend.
+EXACT_N_JOBS = 1
+#: Edge crossings recorded per pose before the exact kernel falls back to a boolean.
+EXACT_CAPACITY = 400_000
+#: Grid cells of the exact backend along a mesh's largest extent (measured best on the Barrett
+#: hand, see docs/performance.md).
+EXACT_CELLS_PER_EXTENT = 48
+#: Exact intersectors (one per grasp geometry) an `ExactBackend` keeps.
+EXACT_CACHE_SIZE = 4
+
+#: Backend instances `exactgrasp.backends.registry.shared_backend` keeps.
+SHARED_CACHE_SIZE = 16

@@ -1,0 +1,179 @@
+"""Cell grids of the exact backend, built once per grasp: each mesh's `tables.CellGrid`, the
+hand's vertices numbered cell by cell, and the hand grid's per-cell search tables.
+
+See "Method, once per grasp" in ``docs/exact-backend.md``. Imports numpy, scipy, `cells`,
+`tables`, `tolerances` and `geometry.winding`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from exactgrasp.backends.exact.cells import raster_triangles
+from exactgrasp.backends.exact.tables import CellGrid
+from exactgrasp.backends.exact.tolerances import GRID_MARGIN, NORMAL_FLOOR
+from exactgrasp.geometry.winding import winding_number
+
+
+def grid_frame(V: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """Origin (3,) and cell counts (3,) of the grid `build_grid` lays over vertices V (n, 3)
+    with cubic cells of edge ``cell``: one cell of padding on every side."""
+    lo = V.min(0) - cell
+    return lo, np.ceil((V.max(0) + cell - lo) / cell).astype(np.int64) + 1
+
+
+def vertex_cells(V: np.ndarray, cell: float) -> np.ndarray:
+    """Flat index of the `build_grid` cell holding each vertex of V (n, 3): shape (n,), int64.
+    (`cells.cell_index` multiplies by 1 / cell instead, so a vertex within rounding of a cell
+    boundary may get the neighbouring cell there; both cells, grown by the grid's margin, hold
+    it.)"""
+    lo, n = grid_frame(V, cell)
+    ijk = np.clip(np.floor((V - lo) / cell).astype(np.int64), 0, n - 1)
+    return (ijk[:, 0] * n[1] + ijk[:, 1]) * n[2] + ijk[:, 2]
+
+
+def cell_order(V: np.ndarray, F: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """The same mesh with its vertices renumbered in the order of their `build_grid` cells
+    (stable), so that each cell's vertices are consecutive: (V (n, 3), F (m, 3))."""
+    order = np.argsort(vertex_cells(V, cell), kind="stable")
+    rank = np.empty(len(V), np.int64)
+    rank[order] = np.arange(len(V))
+    return np.ascontiguousarray(V[order]), np.ascontiguousarray(rank[F])
+
+
+def build_grid(V: np.ndarray, F: np.ndarray, cell: float) -> CellGrid:
+    """A cubic-cell grid over a closed mesh, one cell of padding on every side.
+
+    Parameters
+    ----------
+    V, F : numpy.ndarray
+        The mesh, shapes (n, 3) and (m, 3).
+    cell : float
+        Edge length of a cell, in the mesh's units.
+
+    Returns
+    -------
+    CellGrid
+        Cells touched by a face (closed, grown by `GRID_MARGIN` of a cell) list it; the others
+        are labelled inside or outside by flood fill plus one winding number per region.
+    """
+    from scipy import ndimage
+
+    lo, n = grid_frame(V, cell)
+    margin = GRID_MARGIN * cell
+    cells, tris = raster_triangles(V, F, lo, float(cell), n, margin)
+    ncell = int(np.prod(n))
+    cell_start = np.zeros(ncell + 1, np.int64)
+    np.cumsum(np.bincount(cells, minlength=ncell), out=cell_start[1:])
+    surface = np.zeros(ncell, bool)
+    surface[cells] = True
+    labels, nlab = ndimage.label(~surface.reshape(tuple(n)))
+    status = np.full(ncell, -1, np.int64)
+    flat = labels.reshape(-1)
+    outside = set(
+        np.unique(
+            np.concatenate(
+                [
+                    labels[0].ravel(),
+                    labels[-1].ravel(),
+                    labels[:, 0].ravel(),
+                    labels[:, -1].ravel(),
+                    labels[:, :, 0].ravel(),
+                    labels[:, :, -1].ravel(),
+                ]
+            )
+        ).tolist()
+    ) - {0}
+    for lab in range(1, nlab + 1):
+        idx = np.flatnonzero(flat == lab)
+        if lab in outside:
+            inside = 0
+        else:
+            i, j, k = np.unravel_index(idx[0], tuple(n))
+            centre = lo + (np.array([i, j, k]) + 0.5) * cell
+            inside = round(winding_number(centre, V, F)) & 1
+        status[idx] = inside
+    # Summed-volume table of the surface cells: how many a box of cells holds, in 8 reads.
+    table = np.zeros(tuple(n + 1), np.int64)
+    table[1:, 1:, 1:] = surface.reshape(tuple(n)).cumsum(0).cumsum(1).cumsum(2)
+    return CellGrid(lo, float(cell), n, status, cell_start, tris, table.reshape(-1))
+
+
+def cell_reps(V: np.ndarray, cell: float) -> np.ndarray:
+    """The hand grid cells holding a vertex (the "parts") and the first vertex in each, for
+    vertices numbered cell by cell (`cell_order`): `tables.HandTables.parts`, shape
+    (parts + 1, 2)."""
+    cells, first = np.unique(vertex_cells(V, cell), return_index=True)
+    if np.any(np.diff(first) <= 0):
+        raise AssertionError("hand vertices are not numbered cell by cell")
+    return np.ascontiguousarray(
+        np.stack([np.append(cells, -1), np.append(first, len(V))], axis=1).astype(np.int64)
+    )
+
+
+def next_listed(grid: CellGrid) -> np.ndarray:
+    """Per axis d and grid cell: the index along d of the first cell at or after it, in its
+    line of cells along d, that lists any face (the line's length if none); shape (3, cells)."""
+    n, cs = grid.shape, grid.cell_start
+    listed = (cs[1:] > cs[:-1]).reshape(tuple(n))
+    out = np.empty((3, listed.size), np.int64)
+    for d in range(3):
+        shape = [1, 1, 1]
+        shape[d] = n[d]
+        index = np.where(listed, np.arange(n[d]).reshape(shape), n[d])
+        first = np.flip(np.minimum.accumulate(np.flip(index, d), axis=d), d)
+        out[d] = first.reshape(-1)
+    return out
+
+
+def cell_corners(grid: CellGrid) -> np.ndarray:
+    """Lower corner of every grid cell, shape (cells, 3)."""
+    lo, h, n = grid.corner, grid.cell, grid.shape
+    return lo + np.stack(np.unravel_index(np.arange(np.prod(n)), tuple(n)), axis=1) * h
+
+
+def clip_to_cells(boxes: np.ndarray, corner: np.ndarray, h: float) -> None:
+    """Clip boxes (k, 6: min xyz, max xyz) in place to the cells of edge h whose lower
+    corners are ``corner`` (k, 3), grown by `GRID_MARGIN` of a cell."""
+    boxes[:, :3] = np.maximum(boxes[:, :3], corner - GRID_MARGIN * h)
+    boxes[:, 3:] = np.minimum(boxes[:, 3:], corner + h + GRID_MARGIN * h)
+
+
+def cell_boxes(grid: CellGrid, ABB: np.ndarray) -> np.ndarray:
+    """The faces' bounding boxes ``ABB`` (m, 6) in the order of the grid's cell lists, each
+    clipped to its cell grown by `GRID_MARGIN`: `tables.HandTables.cell_boxes`."""
+    cs, ct = grid.cell_start, grid.cell_faces
+    out = np.ascontiguousarray(ABB[ct])
+    clip_to_cells(out, np.repeat(cell_corners(grid), np.diff(cs), axis=0), grid.cell)
+    return out
+
+
+def cell_patches(grid: CellGrid, AV, AF, AN, ABB) -> np.ndarray:
+    """Per grid cell, bounds of the faces it lists: `tables.HandTables.cell_bounds`, shape
+    (cells, 11), from the mesh (AV, AF), its normals AN and face boxes ABB; see
+    `search.object_faces`."""
+    h, cs, ct = grid.cell, grid.cell_start, grid.cell_faces
+    ncell = len(cs) - 1
+    cell = np.repeat(np.arange(ncell), np.diff(cs))
+    axis = np.zeros((ncell, 3))
+    np.add.at(axis, cell, AN[ct])
+    norm = np.linalg.norm(axis, axis=1)
+    good = norm > NORMAL_FLOOR * max(1.0, norm.max())
+    axis[good] /= norm[good, None]
+    axis[~good] = (1.0, 0.0, 0.0)
+    proj = np.einsum("qkj,qj->qk", AV[AF[ct]], axis[cell])
+    out = np.zeros((ncell, 11))
+    out[:, :3] = axis
+    out[:, 3], out[:, 4] = np.inf, -np.inf
+    np.minimum.at(out[:, 3], cell, proj.min(1))
+    np.maximum.at(out[:, 4], cell, proj.max(1))
+    out[:, 3] -= GRID_MARGIN * h
+    out[:, 4] += GRID_MARGIN * h
+    out[:, 5:8], out[:, 8:] = np.inf, -np.inf
+    for k in range(3):
+        np.minimum.at(out[:, 5 + k], cell, ABB[ct, k])
+        np.maximum.at(out[:, 8 + k], cell, ABB[ct, 3 + k])
+    # Clipped to the cell (grown by the kernel's margin): the part of the faces that the
+    # cell holds lies in this box, which the search tests each object face against.
+    clip_to_cells(out[:, 5:], cell_corners(grid), h)
+    return out

@@ -1,0 +1,63 @@
+"""The exact backend's options and the rules they follow, shared by `backend.ExactBackend` and
+`intersector.ExactIntersector`.
+
+Imports `backends.defaults` and `backends.params` only.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from exactgrasp.backends import defaults
+from exactgrasp.backends.params import Interval, Options, Param, validate_parameters
+
+BROADPHASES = ("coal", "fcl", None)
+
+
+#: What each option of the exact backend may be (checked by `check_options`).
+PARAMETERS: dict[str, Param] = {
+    "broadphase": Param(
+        Options(BROADPHASES), hint="library of the broad phase; None tests every pose in full"
+    ),
+    "n_jobs": Param(Interval(int, 1, None), Options((-1,)), hint="threads; -1 uses every core"),
+    **{
+        key: Param(
+            Interval(float, 0, None, closed="neither"),
+            None,
+            hint=(
+                "grid cell edge, same units as the meshes; None for the default, "
+                f"1/{defaults.EXACT_CELLS_PER_EXTENT} of the mesh's extent"
+            ),
+        )
+        for key in ("hand_cell", "object_cell")
+    },
+    "capacity": Param(
+        Interval(int, 1, None),
+        hint=(
+            "edge crossings recorded per pose before the pose falls back to a boolean; "
+            f"default {defaults.EXACT_CAPACITY}"
+        ),
+    ),
+}
+
+
+def check_options(
+    broadphase: Any, n_jobs: Any, tuning: dict[str, Any], owner: str = "ExactBackend"
+) -> dict[str, Any]:
+    """Check the exact backend's options against `PARAMETERS`.
+
+    Returns
+    -------
+    dict
+        The tuning options given (``hand_cell``, ``object_cell``, ``capacity``) as plain
+        numbers, None cells left out.
+
+    Raises
+    ------
+    BackendError
+        Naming `owner`, the option, the value and what is allowed.
+    """
+    given = validate_parameters(
+        PARAMETERS, {"broadphase": broadphase, "n_jobs": n_jobs, **tuning}, owner
+    )
+    return {key: given[key] for key in tuning if given[key] is not None}

@@ -1,0 +1,265 @@
+"""Once-per-grasp tables of the exact backend: mesh topology, the hand's face, edge and part
+terms with their error bounds, and the object's pose-independent terms.
+
+See "Method, once per grasp" and "The volume's bound" in ``docs/exact-backend.md``. Imports
+numpy, `errors`, `grids`, `sums` (face terms), `tables` and `tolerances`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from exactgrasp.backends.exact.grids import cell_boxes, cell_patches, cell_reps, next_listed
+from exactgrasp.backends.exact.sums import face_terms
+from exactgrasp.backends.exact.tables import (
+    CHUNK,
+    CellGrid,
+    HandTables,
+    MeshTables,
+    ObjectTables,
+)
+from exactgrasp.backends.exact.tolerances import (
+    FACE_D_ERR,
+    FACE_D_ERR_NONE,
+    KAPPA_MAX,
+    LENGTH_FLOOR,
+    PLANE_ERR,
+    PLANE_ERR_NONE,
+    RADIUS_PAD,
+    ROUNDING_PAD,
+    TERM_ERR,
+    U_EXTENDED,
+    U,
+)
+from exactgrasp.errors import MeshError
+
+_REPAIR_HINT = (
+    "the exact backend needs closed, consistently oriented surfaces; load the mesh with "
+    "repair=True (or fix it in a mesh editor) and try again."
+)
+
+
+def prepare_mesh(V: np.ndarray, F: np.ndarray) -> MeshTables:
+    """Edge topology of a closed, oriented mesh (V (n, 3), F (m, 3)), as the kernels read it.
+
+    Raises `MeshError` when some edge does not have exactly two faces, one each way.
+    """
+    m = len(F)
+    src = F.reshape(-1)
+    dst = F[:, [1, 2, 0]].reshape(-1)
+    face = np.repeat(np.arange(m), 3)
+    lo, hi = np.minimum(src, dst), np.maximum(src, dst)
+    key = lo * (len(V) + 1) + hi
+    uniq, inv, counts = np.unique(key, return_inverse=True, return_counts=True)
+    forward = src < dst
+    if np.any(counts != 2) or np.bincount(inv, weights=forward, minlength=len(uniq)).min() != 1:
+        raise MeshError(f"mesh is not a closed, oriented 2-manifold after merging; {_REPAIR_HINT}")
+    ne = len(uniq)
+    E = np.empty((ne, 2), np.int64)
+    E[inv, 0] = lo
+    E[inv, 1] = hi
+    ET = np.empty((ne, 2), np.int64)
+    ET[inv[forward], 0] = face[forward]
+    ET[inv[~forward], 1] = face[~forward]
+    TE = inv.reshape(m, 3).astype(np.int64)
+    TO = forward.reshape(m, 3)
+    # Vertex adjacency in CSR form, one entry per (vertex, incident edge).
+    ends = np.concatenate([E[:, 0], E[:, 1]])
+    other = np.concatenate([E[:, 1], E[:, 0]])
+    eid = np.concatenate([np.arange(ne), np.arange(ne)])
+    order = np.argsort(ends, kind="stable")
+    adj_start = np.zeros(len(V) + 1, np.int64)
+    np.cumsum(np.bincount(ends, minlength=len(V)), out=adj_start[1:])
+    return MeshTables(V, F, E, ET, TE, TO, adj_start, other[order].copy(), eid[order].copy())
+
+
+def face_conditioning(V: np.ndarray, F: np.ndarray, N: np.ndarray) -> tuple:
+    """Per face, ``|b - a| |c - a|`` and the conditioning ``kappa = |b - a| |c - a| / |N|``
+    (infinite where the computed normal N is zero): the direction error of a unit normal
+    from a cross product is about ``7 U kappa`` (see `tolerances.PLANE_ERR`).
+
+    Parameters
+    ----------
+    V, F : numpy.ndarray
+        The mesh, shapes (n, 3) and (m, 3).
+    N : numpy.ndarray, shape (m, 3)
+        The faces' computed (unnormalised) normals ``(b - a) × (c - a)``.
+
+    Returns
+    -------
+    (l1l2 (m,), kappa (m,)) : tuple of numpy.ndarray
+    """
+    a = V[F[:, 0]]
+    l1l2 = np.linalg.norm(V[F[:, 1]] - a, axis=1) * np.linalg.norm(V[F[:, 2]] - a, axis=1)
+    norm = np.linalg.norm(N, axis=1)
+    kappa = np.divide(l1l2, norm, out=np.full(len(F), np.inf), where=norm > 0)
+    return l1l2, kappa
+
+
+def face_d_coefs(l1l2: np.ndarray, kappa: np.ndarray) -> np.ndarray:
+    """What each face's rounded ``D`` can cost its terms, ``|dD| area / 3`` (`FACE_D_ERR`),
+    divided by the coordinate bound, from its ``|b - a| |c - a|`` and conditioning
+    (`face_conditioning`); shape (m,)."""
+    return np.where(kappa <= KAPPA_MAX, FACE_D_ERR, FACE_D_ERR_NONE) * U * l1l2
+
+
+def face_edge_terms(V: np.ndarray, F: np.ndarray, E: np.ndarray, ET: np.ndarray, tiny: float):
+    """The hand's per-face and per-edge terms, with error bounds.
+
+    ``D_t`` and the edge weights ``W_e`` are computed in extended precision (``longdouble``;
+    80-bit on x86-64) once, so the fixed hand's weights carry almost no rounding.
+
+    Parameters
+    ----------
+    V, F : numpy.ndarray
+        The hand mesh in local coordinates, shapes (n, 3) and (m, 3).
+    E, ET : numpy.ndarray
+        Its edges and their faces (`prepare_mesh`).
+    tiny : float
+        Faces with ``|N|² <= tiny`` get ``D = 0`` (as `sums.face_terms`).
+
+    Returns
+    -------
+    AD, AN, AP, AW, WL
+        `tables.HandTables` ``D``, ``normals``, ``planes`` and ``edge_weights`` (the error
+        bound: rounding to double, the extended-precision evaluation, a third of each face's
+        ``D`` cost), and ``W_e`` in extended precision (e,) for the parts' sums.
+    """
+    m = len(F)
+    AD = np.zeros((m, 3))
+    AN = np.zeros((m, 3))
+    face_terms(V, F, tiny, AD, AN)
+    L = V.astype(np.longdouble)
+    a = L[F[:, 0]]
+    NL = np.cross(L[F[:, 1]] - a, L[F[:, 2]] - a)
+    nn = np.einsum("ij,ij->i", NL, NL)
+    good = nn > tiny
+    s = np.zeros(m, np.longdouble)
+    s[good] = np.einsum("ij,ij->i", NL[good], a[good]) / nn[good]
+    DL = s[:, None] * NL
+    AD = np.ascontiguousarray(DL.astype(np.float64))
+    norm = np.linalg.norm(AN, axis=1)
+    unit = np.divide(AN, norm[:, None], out=np.zeros_like(AN), where=norm[:, None] > 0)
+    l1l2, kappa = face_conditioning(V, F, AN)
+    # `search.plane_err_coef` for every face.
+    coef = np.where(kappa <= KAPPA_MAX, PLANE_ERR * U * (1.0 + kappa), PLANE_ERR_NONE)
+    g = max(float(np.sqrt((V**2).sum(1)).max()) * ROUNDING_PAD, LENGTH_FLOOR)
+    dcost = face_d_coefs(l1l2, kappa) * g
+    AP = np.ascontiguousarray(
+        np.column_stack([unit, np.einsum("ij,ij->i", unit, V[F[:, 0]]), coef, dcost])
+    )
+    WL = np.einsum("ij,ij->i", DL[ET[:, 0]] - DL[ET[:, 1]], np.cross(L[E[:, 0]], L[E[:, 1]])) / 6
+    W = WL.astype(np.float64)
+    dn = np.abs(AD[ET[:, 0]]).sum(1) + np.abs(AD[ET[:, 1]]).sum(1)
+    uv = np.abs(V[E[:, 0]]).max(1) * np.abs(V[E[:, 1]]).max(1)
+    err = U * np.abs(W) + TERM_ERR * U_EXTENDED * dn * uv + (dcost[ET[:, 0]] + dcost[ET[:, 1]]) / 3
+    return AD, AN, AP, np.ascontiguousarray(np.column_stack([W, err])), WL
+
+
+def part_sums(epart: np.ndarray, AW: np.ndarray, WL: np.ndarray, nparts: int) -> np.ndarray:
+    """Per hand part, the summed weight of its own edges (extended precision, rounded once)
+    and a bound on its error: shape (parts, 2). ``epart`` is each edge's part (-1 between
+    parts), ``AW`` and ``WL`` as from `face_edge_terms`."""
+    own = epart >= 0
+    total = np.zeros(nparts, np.longdouble)
+    np.add.at(total, epart[own], WL[own])
+    absw = np.bincount(epart[own], weights=np.abs(AW[own, 0]), minlength=nparts)
+    count = np.bincount(epart[own], minlength=nparts)
+    wsum = total.astype(np.float64)
+    err = np.bincount(epart[own], weights=AW[own, 1], minlength=nparts).astype(np.float64)
+    err += U * np.abs(wsum) + 2.0 * count * U_EXTENDED * absw
+    return np.ascontiguousarray(np.column_stack([wsum, err]))
+
+
+def part_edges(mesh: MeshTables, reps: np.ndarray, AW: np.ndarray, WL: np.ndarray) -> tuple:
+    """The hand's edges by part (`tables.HandTables.parts` ``reps``; ``AW``, ``WL`` from
+    `face_edge_terms`).
+
+    Returns
+    -------
+    (mesh, epart, wsum, split)
+        The mesh with each vertex's adjacency reordered so that its edges to other parts come
+        first; the part of each edge (e,), -1 where its ends lie in two parts; the summed weight
+        of each part's own edges and its error bound (parts, 2, `part_sums`); and where each
+        vertex's entries to other parts end (n,).
+    """
+    V, E, adj_start, adj_edge = mesh.vertices, mesh.edges, mesh.adj_start, mesh.adj_edge
+    nparts = len(reps) - 1
+    part = np.searchsorted(reps[:-1, 1], np.arange(len(V)), side="right") - 1
+    same = part[E[:, 0]] == part[E[:, 1]]
+    epart = np.where(same, part[E[:, 0]], -1).astype(np.int64)
+    wsum = part_sums(epart, AW, WL, nparts)
+    owner = np.repeat(np.arange(len(V)), np.diff(adj_start))
+    order = np.lexsort((same[adj_edge], owner))
+    split = adj_start[:-1] + np.bincount(owner[~same[adj_edge]], minlength=len(V))
+    mesh = mesh._replace(
+        adj_vertex=np.ascontiguousarray(mesh.adj_vertex[order]),
+        adj_edge=np.ascontiguousarray(adj_edge[order]),
+    )
+    return mesh, epart, wsum, split.astype(np.int64)
+
+
+def face_runs(V: np.ndarray, F: np.ndarray, size: int) -> np.ndarray:
+    """Bounding spheres of the runs of `size` consecutive faces (the last run may be
+    shorter): shape (runs, 4), centre and radius; the radius is widened by `RADIUS_PAD` of
+    the mesh's scale to cover rounding."""
+    runs = -(-len(F) // size)
+    pad = np.concatenate([F, np.repeat(F[-1:], runs * size - len(F), axis=0)])
+    T = V[pad].reshape(runs, size * 3, 3)
+    centre = 0.5 * (T.max(1) + T.min(1))
+    radius = np.linalg.norm(T - centre[:, None], axis=2).max(1)
+    radius += RADIUS_PAD * max(1.0, float(np.abs(V).max()))
+    return np.ascontiguousarray(np.column_stack([centre, radius]))
+
+
+def hand_tables(mesh: MeshTables, grid: CellGrid, tiny: float) -> tuple[MeshTables, HandTables]:
+    """The fixed hand's tables, its vertices numbered cell by cell in `grid`
+    (`grids.cell_order`); faces with ``|N|² <= tiny`` get ``D = 0``.
+
+    Returns the mesh with its adjacency reordered by part (`part_edges`) and its
+    `tables.HandTables`.
+    """
+    AV, AF = mesh.vertices, mesh.faces
+    AD, AN, AP, AW, WL = face_edge_terms(AV, AF, mesh.edges, mesh.edge_faces, tiny)
+    T = AV[AF]
+    ABB = np.ascontiguousarray(np.hstack([T.min(1), T.max(1)]))
+    # The bounding boxes again in the order of the grid's cell lists, so that the search
+    # reads them sequentially, each clipped to its cell (grown by the kernel's margin):
+    # a crossing in that cell lies in the clipped box.
+    CBB = cell_boxes(grid, ABB)
+    reps = cell_reps(AV, grid.cell)
+    mesh, epart, wsum, split = part_edges(mesh, reps, AW, WL)
+    tables = HandTables(
+        D=AD,
+        normals=AN,
+        boxes=ABB,
+        planes=AP,
+        parts=reps,
+        edge_weights=AW,
+        cell_boxes=CBB,
+        next_listed=next_listed(grid),
+        cell_bounds=cell_patches(grid, AV, AF, AN, ABB),
+        edge_part=epart,
+        part_weights=wsum,
+        adj_split=split,
+        d_cost=np.empty(0),
+    )
+    return mesh, tables
+
+
+def object_tables(mesh: MeshTables) -> ObjectTables:
+    """The object's pose-independent tables (`tables.ObjectTables`), in its own frame."""
+    BV, BF = mesh.vertices, mesh.faces
+    # What each face's rounded D can cost (rigid motions keep it).
+    BN = np.cross(BV[BF[:, 1]] - BV[BF[:, 0]], BV[BF[:, 2]] - BV[BF[:, 0]])
+    return ObjectTables(
+        face_runs=face_runs(BV, BF, CHUNK),
+        d_cost=np.ascontiguousarray(face_d_coefs(*face_conditioning(BV, BF, BN))),
+        # The object is one part, never classified whole.
+        parts=np.array([[-1, 0], [-1, len(BV)]], np.int64),
+        whole=np.zeros(1, np.bool_),
+        adj_split=np.ascontiguousarray(mesh.adj_start[1:]),
+        edge_weights=np.empty((0, 2)),
+        edge_part=np.empty(0, np.int64),
+        part_weights=np.empty((0, 2)),
+    )

@@ -1,0 +1,83 @@
+"""``exactgrasp batch``: the command-line face of `exactgrasp.batch.run_batch`.
+
+The grasp files of a manifest are read as they say (``run_batch`` takes no unit or repair
+overrides), so this command has ``--on-limit`` but no ``--units``/``--repair``.
+
+May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.backends.defaults`,
+`exactgrasp.batch` (pyarrow and distributed load only when a batch runs).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from exactgrasp.backends.defaults import DEFAULT_BACKEND
+from exactgrasp.batch.run import DEFAULT_PART_SIZE, run_batch
+from exactgrasp.cli.common import add_on_limit, add_progress, add_sampler, sampler_from_args
+from exactgrasp.cli.params import add_param, build_backend, split_params
+
+__all__ = ["add_parser", "cmd_batch"]
+
+
+def cmd_batch(args: argparse.Namespace) -> int:
+    """Handler of ``exactgrasp batch``; returns 0 when every row succeeded, 1 otherwise."""
+    sampler = sampler_from_args(args)
+    params = split_params(args.param, [args.backend])[args.backend]
+    build_backend(args.backend, params)  # refuses bad parameters before any work starts
+    summary = run_batch(
+        args.manifest,
+        args.out,
+        backend=args.backend,
+        sampler=sampler,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        backend_params=params,
+        progress=args.progress,
+        part_size=args.part_size,
+        on_limit=args.on_limit,
+        retry_failed=args.retry_failed,
+    )
+    print(summary.text(), file=sys.stdout)
+    return summary.exit_status
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add the ``batch`` sub-command to the ``exactgrasp`` command's subparsers."""
+    parser = subparsers.add_parser(
+        "batch",
+        help="descriptors of every grasp in a manifest, resumable, on local cores or a cluster",
+        description=(
+            "Compute the descriptor of every grasp listed in MANIFEST (.jsonl or .parquet; rows "
+            '{"id": ..., "grasp": "path/to/grasp.json" or an inline grasp}) into --out. Run the '
+            "same command again after a kill to finish what is left. Exit status 1 when any "
+            "row failed (see OUT/errors.jsonl), 2 on a bad manifest or arguments."
+        ),
+    )
+    parser.add_argument("manifest", metavar="MANIFEST", help="manifest file (.jsonl or .parquet)")
+    parser.add_argument("--out", required=True, help="output folder (created; resumed if there)")
+    parser.add_argument(
+        "--backend",
+        default=DEFAULT_BACKEND,
+        help=f"backend name: {DEFAULT_BACKEND} (default), exact or a registered one",
+    )
+    add_param(parser)
+    add_sampler(parser)
+    parser.add_argument(
+        "--workers", type=int, default=None, help="local worker processes (default: all cores)"
+    )
+    parser.add_argument("--scheduler", default=None, help="address of a running dask scheduler")
+    parser.add_argument(
+        "--part-size",
+        type=int,
+        default=DEFAULT_PART_SIZE,
+        help=f"rows per part, the unit of resuming (default {DEFAULT_PART_SIZE})",
+    )
+    parser.add_argument(
+        "--retry-failed", action="store_true", help="compute the parts with failed rows again"
+    )
+    add_on_limit(parser)
+    add_progress(parser)
+    parser.set_defaults(func=cmd_batch)
+    return parser

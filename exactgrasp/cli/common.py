@@ -1,0 +1,278 @@
+"""What the ``exactgrasp`` sub-commands share: ``--sampler``/``--steps``, ``--progress``, the
+grasp-file options (``--units``, ``--repair``, ``--on-limit``) and reading a grasp with them.
+
+Each option is defined here once, so every command spells, checks and documents it the same
+way; errors name the flag, never the Python argument behind it. ``--param`` lives in
+`exactgrasp.cli.params`.
+
+May import: `exactgrasp.errors`, `exactgrasp.geometry.intake`, `exactgrasp.paths`,
+`exactgrasp.grasp`; no other `exactgrasp.cli` module.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from exactgrasp.errors import ExactGraspError, SamplerError
+from exactgrasp.geometry.intake import UNITS
+from exactgrasp.grasp import Grasp
+from exactgrasp.paths.presets import DEFAULT_PRESET, SAMPLER_PARAMETERS, as_sampler
+from exactgrasp.paths.sampler import PRESETS, PathSampler
+
+__all__ = [
+    "FILE_KEYS_TO_FLAGS",
+    "ON_LIMIT",
+    "PYTHON_TO_FLAGS",
+    "add_grasp_options",
+    "add_on_limit",
+    "add_progress",
+    "add_sampler",
+    "add_steps",
+    "flag_message",
+    "grasp_from_args",
+    "read_grasp",
+    "renamed",
+    "sampler_from_args",
+]
+
+ON_LIMIT = ("error", "clip")
+#: Python spellings in library messages and the flags that set the same thing here.
+PYTHON_TO_FLAGS = (
+    *((f"in units={unit!r}", f"in units {unit}") for unit in UNITS),
+    *((f"units={unit!r}", f"--units {unit}") for unit in UNITS),
+    ("repair=True", "--repair"),
+    ("on_limit='clip'", "--on-limit clip"),
+)
+
+
+def _file_key_fixes(key: str, value: str, flag: str) -> tuple[tuple[str, str], ...]:
+    """How a grasp file's error spells the fix ``key: value``, and the flag that makes it."""
+    spelled = f"{json.dumps(key)}: {value}"
+    return (
+        (f"set {spelled} in the grasp file", f"pass {flag}"),
+        (f"Set {spelled} in the grasp file", f"Pass {flag}"),
+        (spelled, flag),
+    )
+
+
+#: The grasp-file keys that errors from reading a grasp file name (``set "object_units": "mm"
+#: in the grasp file``) and the flags that override them.
+FILE_KEYS_TO_FLAGS = (
+    *((f'in "object_units": "{u}"', f"in units {u}") for u in UNITS),
+    *(f for u in UNITS for f in _file_key_fixes("object_units", json.dumps(u), f"--units {u}")),
+    *_file_key_fixes("object_repair", "true", "--repair"),
+    *_file_key_fixes("on_limit", '"clip"', "--on-limit clip"),
+    *PYTHON_TO_FLAGS,
+)
+
+
+def flag_message(message: str, pairs: tuple[tuple[str, str], ...] = PYTHON_TO_FLAGS) -> str:
+    """A library message with its Python argument spellings replaced by the flags."""
+    for python, flag in pairs:
+        message = message.replace(python, flag)
+    return message
+
+
+def renamed(exc: ExactGraspError, message: str) -> ExactGraspError:
+    """An error of the same class as ``exc`` with another message (the base class where that
+    class takes other constructor arguments)."""
+    try:
+        return type(exc)(message)
+    except TypeError:
+        return ExactGraspError(message)
+
+
+# -- --sampler and --steps --------------------------------------------------------------------
+
+
+def _sampler_forms() -> str:
+    return (
+        f"use a preset ({', '.join(PRESETS)}), JSON text of PathSampler parameters "
+        f"({', '.join(SAMPLER_PARAMETERS)}) or the path of a JSON file holding them"
+    )
+
+
+def add_steps(parser: argparse.ArgumentParser) -> None:
+    """The ``--steps N`` option (poses per path, replacing the sampler's ``n_steps``)."""
+    parser.add_argument(
+        "--steps",
+        type=int,
+        default=None,
+        metavar="N",
+        help="poses per path, replacing the sampler's n_steps (default: the sampler's, 9 for "
+        "the presets)",
+    )
+
+
+def add_sampler(parser: argparse.ArgumentParser) -> None:
+    """``--sampler`` (preset, JSON text or JSON file, through `as_sampler`) and ``--steps``."""
+    parser.add_argument(
+        "--sampler",
+        default=DEFAULT_PRESET,
+        metavar="SAMPLER",
+        help=f"path sampler: a preset ({', '.join(PRESETS)}), PathSampler parameters as JSON "
+        'text (e.g. \'{"n_translations": 6, "n_axes": 2, "n_amounts": 2}\') or a JSON file of '
+        f"them (default: {DEFAULT_PRESET})",
+    )
+    add_steps(parser)
+
+
+def _sampler_value(text: str) -> str | dict[str, Any]:
+    """``--sampler`` as a preset name or a parameter dict (JSON text or a JSON file read)."""
+    stripped = text.lstrip()
+    if not stripped.startswith("{"):
+        if text in PRESETS:
+            return text
+        if not Path(text).is_file():
+            raise SamplerError(
+                f"--sampler {text!r}: not a preset, JSON text or a JSON file; {_sampler_forms()}."
+            )
+        try:
+            stripped = Path(text).read_text()
+        except OSError as exc:
+            raise SamplerError(f"--sampler {text!r}: cannot read the file ({exc}).") from exc
+    try:
+        value = json.loads(stripped)
+    except json.JSONDecodeError as exc:
+        raise SamplerError(
+            f"--sampler {text!r}: not valid JSON ({exc}); {_sampler_forms()}."
+        ) from exc
+    if not isinstance(value, dict):
+        raise SamplerError(f"--sampler {text!r}: not a JSON object; {_sampler_forms()}.")
+    unknown = sorted(str(k) for k in value if k not in SAMPLER_PARAMETERS)
+    if unknown:
+        raise SamplerError(
+            f"--sampler {text!r}: unknown parameter(s) {', '.join(unknown)}; a sampler takes "
+            f"{', '.join(SAMPLER_PARAMETERS)}."
+        )
+    return value
+
+
+def sampler_from_args(args: argparse.Namespace) -> PathSampler:
+    """The sampler of ``--sampler`` and ``--steps``, through `exactgrasp.paths.as_sampler`.
+
+    Raises
+    ------
+    SamplerError
+        Naming ``--steps`` or ``--sampler`` and what each accepts.
+    """
+    steps = getattr(args, "steps", None)
+    if steps is not None and steps < 1:
+        raise SamplerError(f"--steps must be a positive number of poses per path, got {steps}.")
+    text = getattr(args, "sampler", None)
+    value = None if text is None else _sampler_value(text)
+    try:
+        return as_sampler(value, n_steps=steps)
+    except SamplerError as exc:
+        raise SamplerError(f"--sampler {text!r}: {exc}") from exc
+
+
+# -- --progress ------------------------------------------------------------------------------
+
+
+def add_progress(parser: argparse.ArgumentParser) -> None:
+    """The ``--progress/--no-progress`` option."""
+    parser.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="progress bar (default: only on a terminal)",
+    )
+
+
+# -- grasp files -----------------------------------------------------------------------------
+
+
+def add_on_limit(parser: argparse.ArgumentParser) -> None:
+    """The ``--on-limit {error,clip}`` option (default: what each grasp file says)."""
+    parser.add_argument(
+        "--on-limit",
+        default=None,
+        choices=ON_LIMIT,
+        help="joint values outside the limits: refuse (error) or clip with a warning (default: "
+        "the grasp file's on_limit, else error)",
+    )
+
+
+def add_grasp_options(parser: argparse.ArgumentParser) -> None:
+    """``--units``, ``--repair/--no-repair`` and ``--on-limit``: overrides of a grasp file."""
+    parser.add_argument(
+        "--units",
+        default=None,
+        choices=tuple(UNITS),
+        help="units of the object's mesh file, replacing the grasp file's object_units "
+        "(default: the file's, else m)",
+    )
+    parser.add_argument(
+        "--repair",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="close and orient the object's mesh (trimesh, pymeshfix) or not, replacing the "
+        "grasp file's object_repair (default: the file's, else no)",
+    )
+    add_on_limit(parser)
+
+
+def read_grasp(
+    path: str | os.PathLike,
+    units: str | None = None,
+    repair: bool | None = None,
+    on_limit: str | None = None,
+) -> Grasp:
+    """`Grasp.from_file` with the command line's overrides; None keeps what the file says.
+
+    Parameters
+    ----------
+    path : path-like
+        Grasp JSON file.
+    units : {"m", "cm", "mm", "inch", "in"}, optional
+        Replaces the file's ``object_units``.
+    repair : bool, optional
+        Replaces the file's ``object_repair``.
+    on_limit : {"error", "clip"}, optional
+        Replaces the file's ``on_limit``.
+
+    Returns
+    -------
+    Grasp
+
+    Raises
+    ------
+    ExactGraspError
+        As `Grasp.from_file`, with the fixes it names (grasp-file keys, Python arguments)
+        spelled as the flags that make them.
+    """
+    overrides = {k: v for k, v in (("repair", repair), ("on_limit", on_limit)) if v is not None}
+    try:
+        if units is None:
+            return Grasp.from_file(path, **overrides)
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError):
+            data = None
+        if not isinstance(data, dict):  # from_file says what is wrong with the file
+            return Grasp.from_file(path, **overrides)
+        # The object units are read from the file's keys, so the override replaces that key.
+        data["object_units"] = units
+        return Grasp.from_dict(data, base_dir=path.parent, source=str(path), **overrides)
+    except ExactGraspError as exc:
+        message = flag_message(str(exc), FILE_KEYS_TO_FLAGS)
+        if message == str(exc):
+            raise
+        raise renamed(exc, message) from exc
+
+
+def grasp_from_args(args: argparse.Namespace, path: str | os.PathLike | None = None) -> Grasp:
+    """The grasp file ``path`` (default ``args.grasp``) read with the options of
+    `add_grasp_options`."""
+    return read_grasp(
+        args.grasp if path is None else path,
+        units=getattr(args, "units", None),
+        repair=getattr(args, "repair", None),
+        on_limit=getattr(args, "on_limit", None),
+    )

@@ -1,0 +1,64 @@
+"""``exactgrasp descriptor``: the descriptor of one grasp file, written as ``.npz``.
+
+The command-line face of `exactgrasp.descriptor.compute_descriptor`.
+
+May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.backends.defaults`,
+`exactgrasp.descriptor`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from exactgrasp.backends.defaults import DEFAULT_BACKEND
+from exactgrasp.cli.common import (
+    add_grasp_options,
+    add_progress,
+    add_sampler,
+    grasp_from_args,
+    sampler_from_args,
+)
+from exactgrasp.cli.params import add_param, build_backend, split_params
+from exactgrasp.descriptor import compute_descriptor
+
+__all__ = ["add_parser", "cmd_descriptor"]
+
+
+def cmd_descriptor(args: argparse.Namespace) -> int:
+    """Handler of ``exactgrasp descriptor``; prints a one-line summary, returns 0."""
+    sampler = sampler_from_args(args)
+    backend = build_backend(args.backend, split_params(args.param, [args.backend])[args.backend])
+    grasp = grasp_from_args(args)
+    descriptor = compute_descriptor(grasp, sampler, backend=backend, progress=args.progress)
+    out = descriptor.save(args.output)
+    values = descriptor.values
+    print(
+        f"{grasp.name}: {values.shape[0]} paths x {values.shape[1]} steps with "
+        f"{args.backend!r} in {descriptor.metadata['seconds']:.2f} s; "
+        f"mean {values.mean():.5f}, max {values.max():.5f} -> {out}"
+    )
+    return 0
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add the ``descriptor`` sub-command to the ``exactgrasp`` command's subparsers."""
+    parser = subparsers.add_parser(
+        "descriptor",
+        help="the descriptor of one grasp file",
+        description="Compute the descriptor of GRASP (a grasp JSON file) with one backend and "
+        "write it as a .npz file (values: paths x steps, intersection volume / hand volume).",
+    )
+    parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file")
+    parser.add_argument("-o", "--output", required=True, help="output .npz file")
+    parser.add_argument(
+        "--backend",
+        default=DEFAULT_BACKEND,
+        help=f"backend name: {DEFAULT_BACKEND} (default), exact or a registered one",
+    )
+    add_param(parser)
+    add_sampler(parser)
+    add_grasp_options(parser)
+    add_progress(parser)
+    parser.set_defaults(func=cmd_descriptor)
+    return parser

@@ -1,0 +1,290 @@
+"""Geoms of a compiled MuJoCo model as closed meshes: type codes, welding, `collect_geoms`.
+
+With ``repair=True`` a mesh geom that is not a closed solid is repaired as
+`exactgrasp.geometry.solid.Solid` repairs a mesh (``Solid(repair=True)``). Imports
+`exactgrasp.errors`, `exactgrasp.geometry` (primitives, shells, solid), numpy and scipy;
+nothing else of `exactgrasp.hands`.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from exactgrasp.errors import MeshError, ModelError, warn_caller
+from exactgrasp.geometry import primitives
+from exactgrasp.geometry.shells import resolve_shells
+from exactgrasp.geometry.solid import Solid
+
+__all__ = [
+    "GEOM_BOX",
+    "GEOM_CAPSULE",
+    "GEOM_CYLINDER",
+    "GEOM_ELLIPSOID",
+    "GEOM_HFIELD",
+    "GEOM_KIND",
+    "GEOM_MESH",
+    "GEOM_PLANE",
+    "GEOM_SPHERE",
+    "JOINT_BALL",
+    "JOINT_FREE",
+    "JOINT_HINGE",
+    "JOINT_SLIDE",
+    "collect_geoms",
+    "geom_mesh",
+    "repair_mesh",
+    "weld_mesh",
+]
+
+#: MuJoCo's ``mjtGeom`` codes.
+(
+    GEOM_PLANE,
+    GEOM_HFIELD,
+    GEOM_SPHERE,
+    GEOM_CAPSULE,
+    GEOM_ELLIPSOID,
+    GEOM_CYLINDER,
+    GEOM_BOX,
+    GEOM_MESH,
+) = range(8)
+#: Geom type names by code, for messages.
+GEOM_KIND = {0: "plane", 1: "hfield", 2: "sphere", 3: "capsule", 4: "ellipsoid"}
+GEOM_KIND.update({5: "cylinder", 6: "box", 7: "mesh", 8: "sdf"})
+#: MuJoCo's ``mjtJoint`` codes.
+JOINT_FREE, JOINT_BALL, JOINT_SLIDE, JOINT_HINGE = range(4)
+
+
+def weld_mesh(
+    V: np.ndarray, F: np.ndarray, what: str, repairs: list[str] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Merge duplicate vertices, drop collapsed faces, check the mesh is closed, and resolve
+    its shells (`exactgrasp.geometry.shells.resolve_shells`: overlapping shells merged with a
+    warning, a self-crossing shell refused with a `ModelError`).
+
+    MuJoCo keeps vertices split where normals differ and stores them in float32, so a closed
+    mesh file comes out of a compiled model open: copies of one vertex are identical or a
+    float32 rounding apart. Vertices within two float32 spacings of each other (7.5e-9 m for
+    coordinates under 0.125 m) are merged; genuine features are far larger (the real Barrett
+    palm has distinct vertices 3.4e-8 m apart, which a 1e-8-grid rounding would keep too).
+
+    Parameters
+    ----------
+    V : numpy.ndarray, shape (n, 3)
+        Vertices (m).
+    F : numpy.ndarray, shape (m, 3)
+        Triangles.
+    what : str
+        The mesh, for messages.
+    repairs : list of str, optional
+        Given: a mesh still open after welding is repaired (`repair_mesh`) and a line saying
+        what changed is appended. None: it is refused.
+
+    Returns
+    -------
+    (numpy.ndarray (n', 3) float64, numpy.ndarray (m', 3) int64)
+        The welded, outward-oriented closed mesh.
+    """
+    V, inverse = np.unique(np.asarray(V, dtype=np.float64), axis=0, return_inverse=True)
+    F = inverse.reshape(-1)[np.asarray(F, dtype=np.int64)]
+    eps = 2.0 * float(np.spacing(np.float32(np.abs(V).max() if len(V) else 1.0)))
+    pairs = cKDTree(V).query_pairs(eps, output_type="ndarray")
+    if len(pairs):
+        graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), (len(V),) * 2)
+        _, label = connected_components(graph, directed=False)
+        first = np.full(label.max() + 1, len(V))
+        np.minimum.at(first, label, np.arange(len(V)))
+        V, F = V[first], label[F]
+    F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])]
+    if len(F) == 0:
+        raise ModelError(f"{what} has no faces")
+    edges = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    key = edges[:, 0] * len(V) + edges[:, 1]
+    reverse = edges[:, 1] * len(V) + edges[:, 0]
+    if len(np.unique(key)) != len(key) or not np.isin(reverse, key).all():
+        if repairs is not None:
+            return repair_mesh(V, F, what, repairs)
+        n_open = int(np.count_nonzero(~np.isin(reverse, key)))
+        raise ModelError(
+            f"{what} is not a closed, consistently oriented surface even after merging "
+            f"duplicate vertices ({n_open} edges without an opposite); pass repair=True "
+            "(to load_model, Hand.from_mjcf or Hand.from_urdf) to close it as "
+            "Solid(repair=True) does, repair the mesh file, or use a primitive geom instead"
+        )
+    try:
+        # Once per mesh asset, at compile time: posing moves links rigidly, so a resolved
+        # link stays resolved in every joint configuration.
+        V, F, _ = resolve_shells(V, F, what, orientation="flip", warn=warn_caller)
+    except MeshError as exc:
+        raise ModelError(str(exc)) from None
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    if np.einsum("ij,ij->", a, np.cross(b, c)) < 0:
+        warn_caller(f"{what} is inside-out (negative volume); its faces were flipped")
+        F = F[:, ::-1].copy()
+    return V, F
+
+
+def repair_mesh(
+    V: np.ndarray, F: np.ndarray, what: str, repairs: list[str]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Close an open mesh geom as ``Solid(repair=True)`` does; say what changed in ``repairs``.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, shape (n, 3)
+        Welded vertices (m).
+    F : numpy.ndarray, shape (m, 3)
+        Triangles.
+    what : str
+        The geom, for messages.
+    repairs : list of str
+        One line is appended: the repairs done and the volume before and after (m^3).
+
+    Returns
+    -------
+    (numpy.ndarray (n', 3) float64, numpy.ndarray (m', 3) int64)
+        The repaired closed mesh, its shells resolved as for any solid.
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            solid = Solid(V, F, name=what, repair=True, check_scale=False)
+        except MeshError as exc:
+            raise ModelError(f"{exc} (with repair=True)") from None
+    for w in caught:  # the repair itself is reported once, below; shell notes pass on
+        if not str(w.message).startswith(f"{what}: repaired"):
+            warn_caller(str(w.message))
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    before = float(np.einsum("ij,ij->", a, np.cross(b, c))) / 6.0
+    actions = list((solid.repair_report or {}).get("actions", []))
+    added = len(solid.faces) - len(F)
+    if added > 0 and not any("hole" in x or "pymeshfix" in x for x in actions):
+        actions.append("filled holes")  # trimesh's split closes small holes unasked
+    repairs.append(
+        f"{what}: {', '.join(actions) or 're-oriented'} ({len(F)} -> {len(solid.faces)} "
+        f"faces); volume {before:.6g} -> {solid.volume:.6g} m^3"
+    )
+    return np.array(solid.vertices), np.array(solid.faces)
+
+
+def geom_mesh(
+    mj_model, g: int, tessellation: int, what: str, repairs: list[str] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Closed mesh ``(V (n, 3) m, F (m, 3))`` of geom ``g`` in the geom's own frame.
+
+    ``repairs`` as in `weld_mesh` (mesh geoms only; primitives are closed).
+    """
+    kind, size = int(mj_model.geom_type[g]), mj_model.geom_size[g]
+    if kind == GEOM_MESH:
+        k = int(mj_model.geom_dataid[g])
+        va, vn = mj_model.mesh_vertadr[k], mj_model.mesh_vertnum[k]
+        fa, fn = mj_model.mesh_faceadr[k], mj_model.mesh_facenum[k]
+        V, F = mj_model.mesh_vert[va : va + vn], mj_model.mesh_face[fa : fa + fn]
+        return weld_mesh(V, F, what, repairs)
+    if kind == GEOM_BOX:
+        return primitives.box(size)
+    if kind == GEOM_SPHERE:
+        return primitives.sphere(size[0], tessellation)
+    if kind == GEOM_CAPSULE:
+        return primitives.capsule(size[0], size[1], tessellation)
+    if kind == GEOM_CYLINDER:
+        return primitives.cylinder(size[0], size[1], tessellation)
+    return primitives.ellipsoid(size[:3], tessellation)
+
+
+def collect_geoms(
+    mj_model,
+    in_tree: np.ndarray,
+    root: int,
+    body_names: list[str],
+    geometry: str,
+    tessellation: int,
+    source: str,
+    *,
+    repair: bool = False,
+) -> tuple[list[tuple[str, int, np.ndarray, np.ndarray]], tuple[str, ...]]:
+    """The hand's geoms as closed meshes in their own frames.
+
+    Parameters
+    ----------
+    mj_model : mujoco.MjModel
+    in_tree : numpy.ndarray, shape (nbody,) bool
+        Bodies in the hand's subtree.
+    root : int
+        The hand's root body.
+    body_names : list of str
+        Name of every body, by id.
+    geometry : {"collision", "visual", "all"}
+        Which geoms make up the hand (see `exactgrasp.hands.loading.load_model`).
+    tessellation : int
+        Segments around curved primitives.
+    source : str
+        The model file, for messages.
+    repair : bool
+        Repair mesh geoms that are not closed (`repair_mesh`), with one warning listing
+        them; only the geoms kept (those of the hand's subtree) are checked at all.
+
+    Returns
+    -------
+    geoms : list of (str, int, numpy.ndarray (n, 3), numpy.ndarray (m, 3))
+        ``(link name, geom id, vertices in the geom frame (m), faces)``; a body with one geom
+        gives one link named after the body, one with several ``body/geom`` links.
+    link_names : tuple of str
+        The link names, in ``geoms`` order.
+    """
+    m = mj_model
+    kept, outside, not_solid, other = [], [], [], 0
+    for g in range(m.ngeom):
+        b, kind = int(m.geom_bodyid[g]), int(m.geom_type[g])
+        label = f"{m.geom(g).name or f'geom {g}'} ({GEOM_KIND.get(kind, kind)} in {body_names[b]})"
+        visual = m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0
+        if geometry != "all" and visual != (geometry == "visual"):
+            other += 1
+        elif not in_tree[b]:
+            outside.append(label)
+        elif kind in (GEOM_PLANE, GEOM_HFIELD) or kind > GEOM_MESH:
+            not_solid.append(label)
+        else:
+            kept.append(g)
+    notes = []
+    if outside:
+        more = f" and {len(outside) - 6} more" if len(outside) > 6 else ""
+        notes.append(f"outside root body {body_names[root]!r}: {', '.join(outside[:6])}{more}")
+    if not_solid:  # planes are infinite; height fields and SDFs are terrain or implicit
+        notes.append(f"not closed solids: {', '.join(not_solid)}")
+    if notes:
+        warn_caller(f"{source}: geoms left out of the hand: " + "; ".join(notes))
+    if not kept:
+        hint = f"; {other} geom(s) of the other kind exist: try geometry='all'" if other else ""
+        raise ModelError(
+            f"{source}: no {geometry} geometry in the hand's subtree "
+            f"(root {body_names[root]!r}){hint}"
+        )
+    per_body: dict[int, list[int]] = {}
+    for g in kept:
+        per_body.setdefault(int(m.geom_bodyid[g]), []).append(g)
+    geoms = []
+    repairs: list[str] | None = [] if repair else None
+    welded = {}  # one weld per mesh asset, however many geoms use it
+    for b, gs in per_body.items():
+        for g in gs:
+            body = body_names[b]
+            name = body if len(gs) == 1 else f"{body}/{m.geom(g).name or g}"
+            what = f"{source}: mesh geom {m.geom(g).name or g!r} of body {body!r}"
+            key = int(m.geom_dataid[g]) if m.geom_type[g] == GEOM_MESH else None
+            if key is None or key not in welded:
+                V, F = geom_mesh(m, g, tessellation, what, repairs)
+                if key is not None:
+                    welded[key] = V, F
+            V, F = welded[key] if key is not None else (V, F)
+            geoms.append((name, g, V, F))
+    if repairs:
+        warn_caller(
+            f"{source}: repaired {len(repairs)} mesh geom(s) (repair=True): "
+            + "; ".join(line.removeprefix(f"{source}: ") for line in repairs)
+            + " (the 'before' volume of an open mesh is only nominal)"
+        )
+    return geoms, tuple(entry[0] for entry in geoms)

@@ -1,0 +1,237 @@
+"""Exact penetration volume of two closed meshes in one call: `intersection_volume`.
+
+Two meshes in any of the usual forms (trimesh meshes, `Solid`s, (vertices, faces) pairs, mesh
+files) go through the same intake as every `Solid` (units, repair, shells), then through the
+exact backend's `ExactIntersector` (certified error bounds, manifold3d boolean where a sign
+cannot be certified). See ``docs/penetration-volume.md``. Imports `exactgrasp.errors`,
+`exactgrasp.geometry` and `exactgrasp.backends` only.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from typing import Any
+
+import numpy as np
+import trimesh
+
+from exactgrasp.backends.base import check_poses
+from exactgrasp.backends.exact import ExactIntersector
+from exactgrasp.errors import BackendError, MeshError
+from exactgrasp.geometry.intake import UNITS, unit_scale
+from exactgrasp.geometry.solid import Solid
+
+__all__ = ["as_solid", "intersection_volume"]
+
+#: What `as_solid` takes, for messages.
+ACCEPTED = (
+    "a trimesh.Trimesh, an exactgrasp.Solid, a (vertices (n, 3), faces (m, 3)) pair, or the "
+    "path of a mesh file (STL, OBJ, PLY, OFF, GLB)"
+)
+BROADPHASES = ("auto", "coal", "fcl", None)
+#: ``broadphase="auto"`` builds coal's BVH for stacks of more poses than this: building it
+#: costs about what the kernel spends on a few hundred poses, and it only saves the kernel's
+#: time on poses whose surfaces are apart.
+AUTO_BVH_POSES = 256
+UNIT_NAMES = sorted(set(UNITS) - {"in"})
+
+
+def as_solid(
+    mesh: Any,
+    name: str = "mesh",
+    *,
+    units: str = "m",
+    repair: bool = False,
+    check_scale: bool = True,
+) -> Solid:
+    """One closed mesh, in any accepted form, as a validated `Solid` (metres).
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh, Solid, (vertices, faces) or path-like
+        A `Solid` is returned as it is (already validated, already in metres: ``units`` and
+        ``repair`` do not apply to it). Vertices (n, 3) in ``units``, faces (m, 3) integer
+        indices, counter-clockwise seen from outside. A path is read with `Solid.from_file`.
+    name : str
+        What the caller calls the mesh; every message starts with it.
+    units : {"m", "cm", "mm", "inch"}
+        Unit of the mesh's coordinates.
+    repair : bool
+        Let trimesh and pymeshfix close and orient the mesh, with a warning (see `Solid`).
+    check_scale : bool
+        Refuse a solid longer than 5 m (millimetres read as metres); see `Solid`.
+
+    Returns
+    -------
+    Solid
+
+    Raises
+    ------
+    MeshError
+        For a form that is not accepted, or a mesh that is not a closed solid (open,
+        inconsistently oriented, self-crossing, flat, non-finite); the message names ``name``.
+    """
+    if isinstance(mesh, Solid):
+        return mesh
+    unit_scale(units)
+    options = {"units": units, "repair": repair, "check_scale": check_scale}
+    if isinstance(mesh, trimesh.Trimesh):
+        return Solid.from_trimesh(mesh, name=name, **options)
+    if isinstance(mesh, trimesh.Scene):
+        raise MeshError(
+            f"{name}: got a trimesh.Scene ({len(mesh.geometry)} geometries); pass one mesh "
+            "(scene.to_mesh() joins them) or the file's path."
+        )
+    if isinstance(mesh, str | os.PathLike):
+        try:
+            return Solid.from_file(mesh, **options)
+        except MeshError as exc:
+            raise MeshError(f"{name}: {exc}") from exc
+    if isinstance(mesh, tuple | list) and len(mesh) == 2:
+        vertices, faces = _arrays(mesh, name)
+        return Solid(vertices, faces, name=name, **options)
+    raise MeshError(f"{name}: got {type(mesh).__name__}; pass {ACCEPTED}.")
+
+
+def _arrays(pair: tuple | list, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """A (vertices, faces) pair as arrays, or a `MeshError` naming ``name``."""
+    try:
+        vertices = np.asarray(pair[0], dtype=np.float64)
+        faces = np.asarray(pair[1])
+        if faces.dtype == object:
+            raise ValueError("faces are not a regular (m, 3) array")
+    except (TypeError, ValueError) as exc:
+        raise MeshError(
+            f"{name}: a (vertices, faces) pair must hold numeric arrays ({exc}); pass {ACCEPTED}."
+        ) from exc
+    return vertices, faces
+
+
+def _units_pair(units: Any) -> tuple[str, str]:
+    """``units`` as (units of a, units of b), or a `MeshError` naming the argument."""
+    pair = (units, units) if isinstance(units, str) else units
+    if (
+        not isinstance(pair, tuple | list)
+        or len(pair) != 2
+        or not all(isinstance(u, str) and u in UNITS for u in pair)
+    ):
+        raise MeshError(
+            f"units={units!r}; use one of {UNIT_NAMES} for both meshes, or a pair "
+            "(units of a, units of b) such as ('m', 'mm')."
+        )
+    return pair[0], pair[1]
+
+
+def _broadphase(broadphase: Any, n_poses: int) -> str | None:
+    """The broad phase to build with: ``"auto"`` is coal where it is installed and the stack
+    holds more than `AUTO_BVH_POSES` poses, else None."""
+    if broadphase not in BROADPHASES:
+        raise BackendError(
+            f"broadphase={broadphase!r}; use 'auto', 'coal', 'fcl' or None (results do not "
+            "depend on it)."
+        )
+    if broadphase == "auto":
+        many = n_poses > AUTO_BVH_POSES
+        return "coal" if many and importlib.util.find_spec("coal") is not None else None
+    return broadphase
+
+
+def _check_backend(backend: Any) -> None:
+    if backend == "exact":
+        return
+    if backend == "voxel":
+        raise BackendError(
+            "backend='voxel' is not offered by intersection_volume: the voxel backend is the "
+            "paper's estimator of a hand in its palm frame (grids sized to the hand's canonical "
+            "units, surface weights of the paper), which two arbitrary meshes do not have; use "
+            "backend='exact' (the default)."
+        )
+    raise BackendError(
+        f"backend={backend!r}; intersection_volume computes with backend='exact' only."
+    )
+
+
+def intersection_volume(
+    a: Any,
+    b: Any,
+    poses: Any = None,
+    backend: str = "exact",
+    *,
+    units: str | tuple[str, str] = "m",
+    repair: bool = False,
+    check_scale: bool = True,
+    return_bounds: bool = False,
+    broadphase: str | None = "auto",
+    n_jobs: int = 1,
+) -> Any:
+    """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3.
+
+    Both meshes are read as `Solid`s (metres; overlapping shells merged, cavities kept, open
+    or self-crossing surfaces refused) and intersected with the exact backend's
+    `ExactIntersector`: every volume lies within its certified bound of the true volume, and
+    agrees with manifold3d's double-precision boolean to that bound plus the boolean's own
+    rounding (see ``docs/exact-backend.md``). Disjoint or touching meshes give exactly 0.
+
+    Parameters
+    ----------
+    a, b : trimesh.Trimesh, Solid, (vertices, faces) or path-like
+        Closed meshes (see `as_solid`). ``b`` is the one that moves.
+    poses : array_like, shape (4, 4) or (..., 4, 4), optional
+        Rigid motions of ``b`` in ``a``'s frame: a vertex ``x`` of ``b`` (metres, after the
+        unit conversion) moves to ``R @ x + t``, ``t`` in metres. None: ``b`` as given.
+    backend : {"exact"}
+        Only the exact backend applies to two arbitrary meshes; ``"voxel"`` is refused.
+    units : {"m", "cm", "mm", "inch"} or (str, str)
+        Unit of the meshes' coordinates: one for both, or (units of a, units of b). Not
+        applied to `Solid` inputs (already in metres).
+    repair : bool
+        Let trimesh and pymeshfix close and orient both meshes, with a warning.
+    check_scale : bool
+        Refuse a mesh longer than 5 m after the unit conversion (see `Solid`).
+    return_bounds : bool
+        Also return each volume's certified error bound (m^3).
+    broadphase : {"auto", "coal", "fcl", None}
+        Library that skips poses whose surfaces are apart; ``"auto"``: coal where installed,
+        for stacks of more than `AUTO_BVH_POSES` poses (its BVH takes longer to build than
+        it saves on fewer). The volumes do not depend on it.
+    n_jobs : int
+        Threads over poses (-1: every core). The volumes do not depend on it.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        m^3: a float when ``poses`` is None or one (4, 4) pose, else an array of shape
+        ``poses.shape[:-2]``. With ``return_bounds``, the pair (volumes, bounds), alike in
+        shape: ``|volume - true volume| <= bound``.
+
+    Raises
+    ------
+    MeshError
+        A mesh in a form not accepted or not a closed solid (the message names ``a`` or
+        ``b``), or unknown ``units``.
+    BackendError
+        A pose that is not a rigid motion (the message names ``poses`` and its index), an
+        unknown ``backend`` or ``broadphase``, a bad ``n_jobs``.
+    """
+    _check_backend(backend)
+    units_a, units_b = _units_pair(units)
+    if not isinstance(repair, bool | np.bool_):
+        raise MeshError(f"repair must be True or False, got {repair!r}.")
+    single = poses is None
+    arr = check_poses(np.eye(4) if single else poses, name="poses")
+    single = single or arr.ndim == 2
+    library = _broadphase(broadphase, arr.size // 16)
+    A = as_solid(a, "a", units=units_a, repair=bool(repair), check_scale=check_scale)
+    B = as_solid(b, "b", units=units_b, repair=bool(repair), check_scale=check_scale)
+    if arr.size == 0:
+        empty = np.zeros(arr.shape[:-2])
+        return (empty, empty.copy()) if return_bounds else empty
+    intersector = ExactIntersector(
+        [(A.vertices, A.faces)], [(B.vertices, B.faces)], broadphase=library, n_jobs=n_jobs
+    )
+    volumes = intersector.volumes(arr)
+    bounds = intersector.volume_bounds
+    if single:
+        volumes, bounds = float(volumes), float(bounds)
+    return (volumes, bounds) if return_bounds else volumes

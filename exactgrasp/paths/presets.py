@@ -1,0 +1,92 @@
+"""`as_sampler`: the one coercion of what callers pass as a sampler into a `PathSampler`.
+
+Every entry point (``compute_descriptor``, ``compare_backends``, ``run_batch`` and the
+command line) goes through `as_sampler`, so they accept the same forms and fail with the same
+message. The preset table itself, `PRESETS`, lives beside `PathSampler.preset` in
+`exactgrasp.paths.sampler` (this module imports that one, never the reverse).
+
+May import: `exactgrasp.errors`, `exactgrasp.paths.sampler`.
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+from typing import Any
+
+from exactgrasp.errors import SamplerError
+from exactgrasp.paths.sampler import PRESETS, PathSampler
+
+__all__ = ["DEFAULT_PRESET", "PRESETS", "SAMPLER_PARAMETERS", "as_sampler"]
+
+#: The preset used when no sampler is given.
+DEFAULT_PRESET = "balanced"
+
+#: Keyword arguments of `PathSampler` (the keys a parameter dict may hold).
+SAMPLER_PARAMETERS = tuple(inspect.signature(PathSampler.__init__).parameters)[1:]
+
+
+def _accepted() -> str:
+    return (
+        f"give None (the {DEFAULT_PRESET!r} preset), a PathSampler, a preset name "
+        f"({', '.join(sorted(PRESETS))}), a dict of PathSampler parameters "
+        f"({', '.join(SAMPLER_PARAMETERS)}) or the JSON text of one"
+    )
+
+
+def as_sampler(value: Any = None, n_steps: int | None = None) -> PathSampler:
+    """The `PathSampler` that ``value`` stands for.
+
+    Parameters
+    ----------
+    value : None or PathSampler or str or dict
+        None: the ``"balanced"`` preset. A `PathSampler`: itself. A str: a preset name
+        (``"balanced"``, ``"translations"``, ``"rotations"``) or, when it starts with ``{``,
+        JSON text of `PathSampler.params`. A dict: `PathSampler.params`.
+    n_steps : int, optional
+        Poses per path, replacing the preset's or the parameters' ``n_steps``. Not allowed
+        with a `PathSampler` whose ``n_steps`` differs (it is already built).
+
+    Returns
+    -------
+    PathSampler
+
+    Raises
+    ------
+    SamplerError
+        Any other type, an unknown preset, invalid JSON, unknown or invalid parameters; the
+        message names the value and the accepted forms.
+    """
+    if isinstance(value, PathSampler):
+        if n_steps is not None and n_steps != value.n_steps:
+            raise SamplerError(
+                f"n_steps={n_steps!r} cannot change the sampler {value!r}, which is already "
+                f"built with n_steps={value.n_steps}; pass its parameters (a dict) or a preset "
+                "name instead."
+            )
+        return value
+    overrides = {} if n_steps is None else {"n_steps": n_steps}
+    if value is None:
+        return PathSampler.preset(DEFAULT_PRESET, **overrides)
+    if isinstance(value, str) and value.lstrip().startswith("{"):
+        try:
+            params = json.loads(value)
+        except json.JSONDecodeError as exc:
+            raise SamplerError(
+                f"sampler {value!r}: not valid JSON ({exc}); {_accepted()}."
+            ) from exc
+        if not isinstance(params, dict):
+            raise SamplerError(f"sampler {value!r}: not a JSON object; {_accepted()}.")
+        value = params
+    if isinstance(value, str):
+        if value not in PRESETS:
+            raise SamplerError(f"unknown preset {value!r}; {_accepted()}.")
+        return PathSampler.preset(value, **overrides)
+    if isinstance(value, dict):
+        unknown = sorted(str(k) for k in value if k not in SAMPLER_PARAMETERS)
+        if unknown:
+            raise SamplerError(
+                f"sampler {value!r}: unknown parameter(s) {', '.join(unknown)}; {_accepted()}."
+            )
+        return PathSampler.from_params({**value, **overrides})
+    raise SamplerError(f"sampler {value!r} is a {type(value).__name__}; {_accepted()}.")

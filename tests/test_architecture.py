@@ -1,0 +1,258 @@
+"""The house rules of the package, read from its source: rooms, layers, circles, sizes.
+
+The layers are the ones `docs/architecture.md` draws; a module may import its own room and the
+rooms of lower layers only.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+import exactgrasp
+
+PACKAGE = Path(exactgrasp.__file__).parent
+ROOT = PACKAGE.parent
+MAX_LINES = 400
+LONG_REASON = "Long because"
+
+#: room -> layer; a room imports rooms of a lower layer (and itself) only.
+LAYERS = {
+    "errors": 0,
+    "version": 0,
+    "cache": 0,
+    "progress": 0,
+    "geometry": 1,
+    "hands": 2,
+    "paths": 2,
+    "grasp": 3,
+    "backends": 4,
+    "descriptor": 5,
+    "overlap": 5,
+    "view": 5,
+    "compare": 6,
+    "batch": 7,
+    "report": 7,
+    "cli": 8,
+}
+
+
+def modules() -> dict[str, Path]:
+    found = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = path.relative_to(ROOT).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        found[".".join(parts)] = path
+    return found
+
+
+MODULES = modules()
+
+#: The lazy public names, the backend registry (entry points) and `require` of optional
+#: packages are the only places that import by name at run time.
+DYNAMIC_IMPORTERS = {"exactgrasp", "exactgrasp.backends.registry", "exactgrasp.errors"}
+
+
+def room(module: str) -> str:
+    return module.split(".")[1] if "." in module else ""
+
+
+def package_of(module: str) -> str:
+    """The package a module belongs to (a package's own `__init__` belongs to itself)."""
+    path = MODULES[module]
+    return module if path.name == "__init__.py" else module.rpartition(".")[0]
+
+
+def in_type_checking(node: ast.AST, parents: dict) -> bool:
+    while node in parents:
+        node = parents[node]
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            return True
+    return False
+
+
+def imports(module: str) -> list[tuple[str, list[str], bool, int]]:
+    """(imported module, names, only for type checking, line) for every exactgrasp import."""
+    tree = ast.parse(MODULES[module].read_text())
+    parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == "exactgrasp":
+                    found.append((alias.name, [], in_type_checking(node, parents), node.lineno))
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module.split(".")[0] != "exactgrasp":
+                continue
+            names = [alias.name for alias in node.names]
+            target = node.module
+            for name in names:
+                # `from exactgrasp.x import y` where y is a submodule imports that submodule.
+                if f"{target}.{name}" in MODULES:
+                    found.append(
+                        (f"{target}.{name}", [], in_type_checking(node, parents), node.lineno)
+                    )
+                else:
+                    found.append((target, [name], in_type_checking(node, parents), node.lineno))
+        elif (
+            isinstance(node, ast.Call)
+            and ast.unparse(node.func) in ("__import__", "importlib.import_module")
+            and module not in DYNAMIC_IMPORTERS
+        ):
+            pytest.fail(f"{module}:{node.lineno} imports dynamically: {ast.unparse(node)}")
+    return found
+
+
+def edges(*, runtime_only: bool) -> dict[str, set[str]]:
+    graph: dict[str, set[str]] = {m: set() for m in MODULES}
+    for module in MODULES:
+        for target, _, type_only, _ in imports(module):
+            if runtime_only and type_only:
+                continue
+            graph[module].add(target)
+    return graph
+
+
+def test_every_room_has_a_layer():
+    rooms = {room(m) for m in MODULES if "." in m}
+    assert rooms == set(LAYERS), "add the new room to LAYERS and to docs/architecture.md"
+
+
+@pytest.mark.parametrize("module", sorted(m for m in MODULES if "." in m))
+def test_imports_flow_downward(module):
+    here = room(module)
+    for target, _, _, line in imports(module):
+        there = room(target)
+        if target == "exactgrasp":
+            pytest.fail(f"{module}:{line} imports the package root; import the submodule")
+        if there == here:
+            continue
+        assert LAYERS[there] < LAYERS[here], (
+            f"{module}:{line} imports {target}: room {here!r} (layer {LAYERS[here]}) may not "
+            f"import room {there!r} (layer {LAYERS[there]})"
+        )
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_no_private_name_crosses_a_package(module):
+    mine = package_of(module)
+    for target, names, _, line in imports(module):
+        if target not in MODULES or package_of(target) == mine:
+            continue
+        private = [n for n in names if n.startswith("_") and n != "__version__"]
+        private_module = any(p.startswith("_") for p in target.split(".")[1:])
+        assert not private and not private_module, (
+            f"{module}:{line} imports {target} {private}: a private name of another package"
+        )
+
+
+def test_no_import_circle():
+    graph = edges(runtime_only=True)
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(node: str) -> None:
+        state[node] = 1
+        stack.append(node)
+        for nxt in sorted(graph.get(node, ())):
+            if nxt not in graph:
+                continue
+            if state.get(nxt) == 1:
+                # A package imports its own submodules to re-export them; that is not a circle
+                # unless a submodule imports the package back.
+                cycle = [*stack[stack.index(nxt) :], nxt]
+                pytest.fail("import circle: " + " -> ".join(cycle))
+            if nxt not in state:
+                visit(nxt)
+        stack.pop()
+        state[node] = 2
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node)
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_module_has_a_docstring_and_a_size_limit(module):
+    text = MODULES[module].read_text()
+    tree = ast.parse(text)
+    docstring = ast.get_docstring(tree)
+    if MODULES[module].name != "__main__.py":
+        assert docstring, f"{module} has no module docstring"
+    n_lines = len(text.splitlines())
+    if n_lines > MAX_LINES:
+        assert docstring and LONG_REASON in docstring, (
+            f"{module} has {n_lines} lines (> {MAX_LINES}) and no '{LONG_REASON} ...' line"
+        )
+
+
+def test_every_exception_is_exported():
+    from exactgrasp import errors
+
+    classes = {
+        name
+        for name, value in vars(errors).items()
+        if isinstance(value, type)
+        and issubclass(value, Exception)
+        and value.__module__ == errors.__name__
+    }
+    assert len(classes) >= 14
+    missing = sorted(classes - set(exactgrasp.__all__))
+    assert not missing, f"exceptions not exported from exactgrasp: {missing}"
+    for name in classes:
+        assert getattr(exactgrasp, name) is getattr(errors, name)
+
+
+def test_exceptions_live_in_errors():
+    for module, path in MODULES.items():
+        if module == "exactgrasp.errors":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ClassDef):
+                bases = {ast.unparse(b) for b in node.bases}
+                assert not any(b.endswith(("Error", "Exception")) for b in bases), (
+                    f"{module} defines exception {node.name}; it belongs in exactgrasp/errors.py"
+                )
+
+
+def test_architecture_doc_names_every_room_and_only_real_modules():
+    doc = (ROOT / "docs" / "architecture.md").read_text()
+    for name in LAYERS:
+        assert f"`{name}" in doc, f"docs/architecture.md does not describe room {name!r}"
+    for path in re.findall(r"`(exactgrasp/[\w/]+\.py)`", doc):
+        assert (ROOT / path).exists(), f"docs/architecture.md names {path}, which does not exist"
+    for dotted in re.findall(r"`(exactgrasp(?:\.\w+)+)`", doc):
+        parts = dotted.split(".")
+        assert any(".".join(parts[:k]) in MODULES for k in range(len(parts), 1, -1)), (
+            f"docs/architecture.md names {dotted}, which is not a module"
+        )
+
+
+WORDS = re.compile(
+    r"\b(issue|brief|ticket|another engineer)s?\b|(?<!scope=\")\bsessions?\b", re.IGNORECASE
+)
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        *sorted(
+            str(p.relative_to(ROOT))
+            for pattern in ("exactgrasp/**/*.py", "tests/*.py", "docs/**/*.md", "benchmarks/*.py")
+            for p in ROOT.glob(pattern)
+            if p.name != "test_architecture.py"
+        ),
+        "README.md",
+    ],
+)
+def test_project_speaks_of_itself(path):
+    text = (ROOT / path).read_text()
+    hits = [
+        f"{path}:{text[: m.start()].count(chr(10)) + 1}: {m.group(0)}"
+        for m in WORDS.finditer(text)
+    ]
+    assert not hits, "words about how the project is run, not what it is: " + "; ".join(hits)

@@ -1,0 +1,505 @@
+"""The grasp file format: the shipped JSON Schema against the code and the docs, round trips of
+every hand kind, and the messages of unknown keys, missing keys, wrong types and bad meshes."""
+
+from __future__ import annotations
+
+import inspect
+import json
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import exactgrasp as eg
+from exactgrasp.errors import GraspFileError, JointError, MeshError, ModelError
+from exactgrasp.geometry.intake import UNITS
+from exactgrasp.grasp import FORMAT
+from exactgrasp.grasp.files import HAND_KEYS, OBJECT_KEYS, file_spelling
+from exactgrasp.grasp.schema import INFORMATIONAL, check_grasp_data, grasp_file_schema
+from exactgrasp.hands.barrett import barrett
+from exactgrasp.hands.builtins import BUILTIN_HANDS
+from exactgrasp.hands.gripper import parallel_gripper
+from exactgrasp.hands.loading import load_model
+from exactgrasp.hands.sources import HAND_SOURCES
+from tests.conftest import box_arrays
+
+ROOT = Path(__file__).resolve().parents[1]
+DOC = ROOT / "docs" / "grasp-file.md"
+SCHEMA = grasp_file_schema()
+POSE = [[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 1.0, 0.13], [0, 0, 0, 1.0]]
+
+
+def resolve(schema: dict) -> dict:
+    while "$ref" in schema:
+        target = SCHEMA
+        for part in schema["$ref"].removeprefix("#/").split("/"):
+            target = target[part]
+        schema = {**target, **{k: v for k, v in schema.items() if k != "$ref"}}
+    return schema
+
+
+def key_paths(schema: dict = SCHEMA, prefix: str = "") -> dict[str, dict]:
+    """Every named key of the schema, dotted (``hand_options.palm.depth``) -> its schema."""
+    schema = resolve(schema)
+    found = {}
+    for branch in schema.get("oneOf", []) + schema.get("anyOf", []):
+        found.update(key_paths(branch, prefix))
+    for key, sub in schema.get("properties", {}).items():
+        path = f"{prefix}{key}"
+        found[path] = resolve(sub)
+        found.update(key_paths(sub, path + "."))
+    return found
+
+
+KEYS = key_paths()
+
+
+def hand_variants() -> list[dict]:
+    return [resolve(b) for b in resolve(KEYS["hand"])["oneOf"]]
+
+
+def const(branch: dict, key: str):
+    return branch["properties"][key].get("const")
+
+
+# -- the schema against the code --------------------------------------------------------------
+
+
+def test_schema_is_valid_json_schema_and_accepts_what_save_writes(tmp_path):
+    jsonschema = pytest.importorskip("jsonschema", reason="jsonschema is not a dependency")
+    jsonschema.Draft202012Validator.check_schema(SCHEMA)
+    grasp = eg.Grasp(barrett(), eg.objects.box(), POSE)
+    data = json.loads(grasp.save(tmp_path / "g.json").read_text())
+    jsonschema.Draft202012Validator(SCHEMA).validate(data)
+
+
+def test_schema_names_what_the_code_takes():
+    assert KEYS["format"]["enum"] == [FORMAT]
+    assert KEYS["object_units"]["enum"] == list(UNITS)
+    assert {const(b, "type") for b in hand_variants()} == set(HAND_SOURCES) - {"model"}
+    (file,) = [b for b in hand_variants() if const(b, "type") == "file"]
+    assert file["properties"]["units"]["enum"] == list(UNITS)
+    builtins = {const(b, "name"): b for b in hand_variants() if const(b, "type") == "builtin"}
+    assert sorted(builtins) == sorted(BUILTIN_HANDS)
+    for name, branch in builtins.items():
+        params = inspect.signature(BUILTIN_HANDS[name]).parameters
+        options = {n for n, p in params.items() if p.kind is inspect.Parameter.KEYWORD_ONLY}
+        assert set(branch["properties"]["options"].get("properties", {})) == options, name
+    model = inspect.signature(load_model).parameters
+    options = {n for n, p in model.items() if p.kind is inspect.Parameter.KEYWORD_ONLY}
+    assert set(KEYS["hand_options"]["properties"]) == options - {"xml"}
+    frame = set(eg.HandFrame.from_palm([0, 0, 0], [0, 0, 1], [0, 1, 0], 1.0).to_dict())
+    assert frame | {"identity"} <= set(KEYS["hand_frame"]["properties"])
+    # every key has a description; the file's spelling of each Python option is a schema key
+    assert all(sub.get("description") for sub in KEYS.values())
+    spelled = [*OBJECT_KEYS.values(), *(k for keys in HAND_KEYS.values() for k in keys.values())]
+    assert set(spelled) <= set(KEYS)
+
+
+def test_real_barrett_grasp_files_all_load(shared_data):
+    barrett_dir = shared_data / "barrett-grasps"
+    files = sorted((barrett_dir / "grasps").glob("*.json")) + sorted(
+        (barrett_dir / "noise").glob("*.json")
+    )
+    assert len(files) == 46
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for path in files:
+            eg.Grasp.from_file(path)
+    # the study records follow the same schema (read with clipping and repairs elsewhere)
+    records = sorted((barrett_dir / "study-records").rglob("*.json"))
+    assert len(records) > 300
+    for path in records:
+        check_grasp_data(json.loads(path.read_text()), str(path))
+
+
+# -- round trips, one per hand kind -----------------------------------------------------------
+
+MJCF = """<mujoco model="two_link">
+  <compiler angle="radian"/>
+  <asset><mesh name="palm" file="package://my_hand/meshes/palm.stl"/></asset>
+  <worldbody>
+    <body name="palm">
+      <geom type="mesh" mesh="palm"/>
+      <body name="finger" pos="0 0.04 0.01">
+        <joint name="knuckle" type="hinge" axis="1 0 0" range="0 1.5"/>
+        <geom type="box" size="0.01 0.01 0.03" pos="0 0 0.03"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>"""
+PALM = {"origin": [0, 0, 0.01], "normal": "+z", "up": "+y", "depth": 0.06}
+
+
+def make_hand(kind: str, folder: Path) -> eg.Hand:
+    frame = eg.HandFrame.from_palm([0, 0, 0.02], [0, 0, 1], [0, 1, 0], 0.08)
+    if kind == "builtin":
+        return barrett({"finger_1_med_joint": 0.7}, distal_coupling=True, tessellation=16)
+    if kind == "gripper":
+        return parallel_gripper({"finger_1_joint": 0.01})
+    if kind == "meshes":
+        links = [box_arrays([-0.05, -0.05, 0], [0.05, 0.05, 0.02])]
+        return eg.Hand.from_meshes(links, frame=frame, names=["palm"])
+    if kind == "file":
+        trimesh.Trimesh(*box_arrays([-50, -50, 0], [50, 50, 20])).export(folder / "palm.stl")
+        return eg.Hand.from_file(folder / "palm.stl", frame=frame, units="mm", repair=True)
+    meshes = folder / "ros" / "my_hand" / "meshes"
+    meshes.mkdir(parents=True)
+    trimesh.creation.box((0.08, 0.1, 0.02)).export(meshes / "palm.stl")
+    (folder / "models").mkdir()
+    (folder / "models" / "hand.xml").write_text(MJCF)
+    return eg.Hand.from_mjcf(
+        folder / "models" / "hand.xml",
+        joints={"knuckle": 0.3},
+        package_dirs=[str(folder / "ros")],
+        repair=True,
+        palm=PALM,
+    )
+
+
+@pytest.mark.parametrize("kind", [*sorted(HAND_SOURCES), "gripper"])
+def test_round_trip_of_each_hand_kind(kind, tmp_path, monkeypatch):
+    grasp = eg.Grasp(make_hand(kind, tmp_path), eg.objects.box((0.02, 0.02, 0.02)), POSE, "rt")
+    path = grasp.save(tmp_path / "grasps" / "g.json")
+    data = json.loads(path.read_text())
+    check_grasp_data(data, str(path))
+    assert ("hand_model" in data) == (kind == "model")
+    if kind != "model":
+        assert data["hand"]["type"] == ("builtin" if kind == "gripper" else kind)
+    # read from elsewhere: every path is relative to the grasp file, not the working folder
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    again = eg.Grasp.from_file(path)
+    assert again.geometry_key == grasp.geometry_key
+    assert again.hand.joints == grasp.hand.joints
+    copy_path = again.save(tmp_path / "copies" / "deeper" / "g.json")
+    copied = json.loads(copy_path.read_text())
+    assert eg.Grasp.from_file(copy_path).geometry_key == grasp.geometry_key
+    if kind == "model":
+        options = copied["hand_options"]
+        assert options["package_dirs"] == ["../../ros"]
+        assert options["repair"] is True
+        assert options["palm"] == PALM
+        assert copied["hand_model"] == "../../models/hand.xml"
+    if kind == "builtin":
+        assert copied["hand"]["options"] == {"distal_coupling": True, "tessellation": 16}
+    if kind == "file":
+        assert copied["hand"] == {
+            "type": "file",
+            "path": "../../palm.stl",
+            "units": "mm",
+            "repair": True,
+        }
+
+
+def test_surface_samples_are_relative_to_the_grasp_file(tmp_path, monkeypatch):
+    trimesh.Trimesh(*box_arrays([-10, -10, -10], [10, 10, 10])).export(tmp_path / "box.stl")
+    points = trimesh.PointCloud([[10.0, 0, 0], [0, 10.0, 0], [0, 0, -10.0]])
+    points.export(tmp_path / "box_P.ply")
+    data = {
+        "object": "box.stl",
+        "object_units": "mm",
+        "object_surface_samples": "box_P.ply",
+        "object_pose_in_hand": POSE,
+        "hand": {"type": "builtin", "name": "barrett"},
+    }
+    (tmp_path / "g.json").write_text(json.dumps(data))
+    monkeypatch.chdir(tmp_path.parent)
+    grasp = eg.Grasp.from_file(tmp_path / "g.json")
+    np.testing.assert_allclose(grasp.object.surface_samples[0], [0.01, 0, 0])
+    saved = json.loads(grasp.save(tmp_path / "out" / "g.json").read_text())
+    assert saved["object_surface_samples"] == "../box_P.ply"
+
+
+# -- refused keys -----------------------------------------------------------------------------
+
+
+@pytest.fixture
+def grasp_file(tmp_path) -> tuple[Path, dict]:
+    """A valid grasp file of the built-in hand and a box, and its content."""
+    grasp = eg.Grasp(barrett(), eg.objects.box(), POSE, name="g")
+    path = grasp.save(tmp_path / "g.json")
+    return path, json.loads(path.read_text())
+
+
+def write(path: Path, data: dict) -> Path:
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda d: d.update(object_unit="mm"),
+            r"unknown key 'object_unit'; did you mean 'object_units'\?",
+        ),
+        (
+            lambda d: d["hand"].update(optins={}),
+            r"unknown key 'hand\.optins'; did you mean 'hand\.options'\?",
+        ),
+        (
+            lambda d: d["hand"]["options"].update(tesselation=8),
+            r"unknown key 'hand\.options\.tesselation'; "
+            r"did you mean 'hand\.options\.tessellation'\?",
+        ),
+        (
+            lambda d: d["hand_frame"].update(orgin=[0, 0, 0]),
+            r"unknown key 'hand_frame\.orgin'; did you mean 'hand_frame\.origin'\?",
+        ),
+        (
+            lambda d: d.update(colour="red"),
+            r"unknown key 'colour'\. Keys of a grasp file: format, name, object",
+        ),
+    ],
+)
+def test_unknown_keys_refused_with_the_closest_known_key(grasp_file, edit, message):
+    path, data = grasp_file
+    edit(data)
+    with pytest.raises(GraspFileError, match=re.escape(str(path)) + ": " + message):
+        eg.Grasp.from_file(write(path, data))
+
+
+def test_unknown_hand_options_key_refused(tmp_path):
+    data = {
+        "object": "box.stl",
+        "object_pose_in_hand": POSE,
+        "hand_model": "hand.urdf",
+        "hand_options": {"package_dir": ["ros"]},
+    }
+    with pytest.raises(
+        GraspFileError,
+        match=r"g\.json: unknown key 'hand_options\.package_dir'; "
+        r"did you mean 'hand_options\.package_dirs'\?",
+    ):
+        eg.Grasp.from_file(write(tmp_path / "g.json", data))
+
+
+def test_own_notes_and_the_shared_data_keys_are_accepted(grasp_file):
+    path, data = grasp_file
+    data["x-recorded-by"] = {"rig": 2}
+    data["contact_links"] = None
+    data["checks"] = {"hand_object_intersection_m3": 0.0}
+    assert eg.Grasp.from_file(write(path, data)).name == "g"
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda d: d.pop("object_pose_in_hand"),
+            r"missing required key 'object_pose_in_hand' \(Rigid 4x4",
+        ),
+        (
+            lambda d: d["hand"].pop("type"),
+            r"missing required key 'hand\.type' \(one of \"builtin\", \"file\", \"meshes\"\)",
+        ),
+        (lambda d: d.pop("hand"), r"the grasp file needs 'hand_model' or 'hand'"),
+        (
+            lambda d: d.update(hand_model="h.urdf"),
+            r"the grasp file gives 'hand_model' and 'hand'; give one",
+        ),
+        (
+            lambda d: d.update(hand_options={"repair": True}),
+            r"'hand_options' applies to 'hand_model' only",
+        ),
+        (
+            lambda d: d.update(hand_frame={"origin": [0, 0, 0]}),
+            r"hand_frame needs 'identity' or all of 'origin', 'normal', 'up', 'depth'",
+        ),
+    ],
+)
+def test_missing_keys(grasp_file, edit, message):
+    path, data = grasp_file
+    edit(data)
+    with pytest.raises(GraspFileError, match=re.escape(str(path)) + ": " + message):
+        eg.Grasp.from_file(write(path, data))
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda d: d.update(object_pose_in_hand="eye"),
+            r"object_pose_in_hand must be a list of 4 lists of 4 numbers, got the string \"eye\"",
+        ),
+        (
+            lambda d: d["object_pose_in_hand"].pop(),
+            r"object_pose_in_hand must be a list of 4 lists of 4 numbers, got a list of 3 items",
+        ),
+        (
+            lambda d: d["object_pose_in_hand"][1].__setitem__(2, "1"),
+            r"object_pose_in_hand\[1\]\[2\] must be a number, got the string \"1\"",
+        ),
+        (
+            lambda d: d.update(object_units="millimetres"),
+            r"object_units must be one of \"m\", \"cm\", \"mm\", \"inch\", \"in\", "
+            r"got the string \"millimetres\"",
+        ),
+        (
+            lambda d: d.update(object_repair="yes"),
+            r"object_repair must be true or false, got the string \"yes\"",
+        ),
+        (
+            lambda d: d["joints"].update(finger_1_med_joint="0.5"),
+            r"joints\.finger_1_med_joint must be a number",
+        ),
+        (
+            lambda d: d["hand"]["options"].update(tessellation=2),
+            r"hand\.options\.tessellation must be an integer >= 4, got 2",
+        ),
+        (
+            lambda d: d["hand"].update(type="builtn"),
+            r"hand\.type must be one of \"builtin\", \"file\", \"meshes\", got the string "
+            r"\"builtn\" \(did you mean \"builtin\"\?\)",
+        ),
+        (
+            lambda d: d["hand_frame"].update(depth=-1),
+            r"hand_frame\.depth must be a number > 0, got -1",
+        ),
+        (lambda d: d.update(name=7), r"name must be a string, got 7"),
+    ],
+)
+def test_wrong_types(grasp_file, edit, message):
+    path, data = grasp_file
+    edit(data)
+    with pytest.raises(GraspFileError, match=re.escape(str(path)) + ": " + message):
+        eg.Grasp.from_file(write(path, data))
+
+
+# -- errors of the object and the hand name the file's keys -----------------------------------
+
+
+def open_box_file(path: Path) -> None:
+    vertices, faces = box_arrays([-10, -10, -10], [10, 10, 10])
+    trimesh.Trimesh(vertices, faces[1:], process=False).export(path)
+
+
+def test_bad_object_mesh_names_object_and_object_repair(tmp_path):
+    open_box_file(tmp_path / "open.stl")
+    data = {
+        "object": "open.stl",
+        "object_units": "mm",
+        "object_pose_in_hand": POSE,
+        "hand": {"type": "builtin", "name": "barrett"},
+    }
+    path = write(tmp_path / "g.json", data)
+    with pytest.raises(GraspFileError) as info:
+        eg.Grasp.from_file(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: object: ")
+    assert 'set "object_repair": true in the grasp file' in message
+    assert "repair=True" not in message
+    assert isinstance(info.value.__cause__, MeshError)
+    # the fix as the message spells it works, and so does the Python override
+    repaired = eg.Grasp.from_file(write(path, {**data, "object_repair": True}))
+    assert repaired.object.volume == pytest.approx(0.02**3)
+    assert eg.Grasp.from_file(path, repair=True).object.hash == repaired.object.hash
+
+
+def test_object_in_the_wrong_unit_names_object_units(tmp_path):
+    trimesh.Trimesh(*box_arrays([-50, -50, -50], [50, 50, 50])).export(tmp_path / "box.stl")
+    data = {
+        "object": "box.stl",
+        "object_pose_in_hand": POSE,
+        "hand": {"type": "builtin", "name": "barrett"},
+    }
+    with pytest.raises(
+        GraspFileError, match=r'set "object_units": "mm" in the grasp file'
+    ) as info:
+        eg.Grasp.from_file(write(tmp_path / "g.json", data))
+    assert "check_scale" not in str(info.value)
+
+
+def test_hand_errors_name_the_file_keys(tmp_path, grasp_file):
+    path, data = grasp_file
+    data["joints"]["finger_1_med_joint"] = 3.0
+    with pytest.raises(
+        JointError, match=r'g\.json: joints: .*set "on_limit": "clip" in the grasp file'
+    ):
+        eg.Grasp.from_file(write(path, data))
+    with pytest.warns(UserWarning, match="clip"):
+        eg.Grasp.from_file(write(path, {**data, "on_limit": "clip"}))
+    # a model whose package is not found: the fix is spelled as hand_options.package_dirs
+    (tmp_path / "models").mkdir()
+    (tmp_path / "models" / "hand.xml").write_text(MJCF)
+    model = {
+        "object": data["object"],
+        "object_pose_in_hand": POSE,
+        "hand_model": "models/hand.xml",
+        "hand_options": {"palm": PALM},
+    }
+    with pytest.raises(
+        GraspFileError, match=r'g\.json: hand_model: .*"hand_options": \{"package_dirs"'
+    ) as info:
+        eg.Grasp.from_file(write(path, model))
+    assert isinstance(info.value.__cause__, ModelError)
+    assert "package_dirs=" not in str(info.value)
+    model["hand_options"]["package_dirs"] = ["nowhere"]
+    with pytest.raises(GraspFileError, match=r"hand_options\.package_dirs: the folder 'nowhere'"):
+        eg.Grasp.from_file(write(path, model))
+    # a rigid hand without a frame: the fix is hand_frame
+    trimesh.Trimesh(*box_arrays([0, 0, 0], [0.1, 0.1, 0.02])).export(tmp_path / "palm.stl")
+    rigid = {**data, "hand": {"type": "file", "path": "palm.stl"}, "joints": {}}
+    del rigid["hand_frame"]
+    with pytest.raises(GraspFileError, match=r'g\.json: hand: .*give "hand_frame": \{"origin"'):
+        eg.Grasp.from_file(write(path, rigid))
+
+
+def test_file_spelling():
+    assert file_spelling("pass repair=True to fix it", OBJECT_KEYS) == (
+        'set "object_repair": true in the grasp file to fix it'
+    )
+    assert file_spelling("as Solid(repair=True) does", HAND_KEYS["model"]) == (
+        "as Solid(repair=True) does"
+    )
+    assert file_spelling("Pass package_dirs=['/a'] or", HAND_KEYS["model"]) == (
+        'Set "hand_options": {"package_dirs": ["/a"]} in the grasp file or'
+    )
+    assert (
+        file_spelling("(with repair=True)", HAND_KEYS["file"]) == '(with "hand": {"repair": true})'
+    )
+
+
+# -- the docs ---------------------------------------------------------------------------------
+
+DOC_TEXT = DOC.read_text()
+EXAMPLES = re.findall(r"```json\n(.*?)```", DOC_TEXT, flags=re.S)
+
+
+def doc_rows() -> dict[str, str]:
+    return {m.group(1): m.group(0) for m in re.finditer(r"^\| `([^`]+)` \|.*$", DOC_TEXT, re.M)}
+
+
+def test_doc_describes_every_schema_key_with_its_default():
+    rows = doc_rows()
+    missing = sorted(set(KEYS) - set(rows))
+    assert not missing, f"{DOC.name} has no table row for {missing}"
+    unknown = sorted(set(rows) - set(KEYS))
+    assert not unknown, f"{DOC.name} describes keys the schema does not have: {unknown}"
+    for key, sub in KEYS.items():
+        if "default" in sub:
+            assert f"`{json.dumps(sub['default'])}`" in rows[key], f"default of {key}"
+        if sub["description"].startswith(INFORMATIONAL):
+            assert rows[key].count("|") == 4, f"{key} belongs in the informational table"
+
+
+def test_doc_examples_follow_the_schema():
+    assert len(EXAMPLES) == 3
+    for text in EXAMPLES:
+        check_grasp_data(json.loads(text), DOC.name)
+
+
+def test_doc_example_loads(tmp_path):
+    data = json.loads(EXAMPLES[0])
+    trimesh.creation.box((60, 100, 100)).export(tmp_path / data["object"])
+    grasp = eg.Grasp.from_file(write(tmp_path / "box-grasp.json", data))
+    assert grasp.name == "box-grasp"
+    assert grasp.hand.joints["finger_1_med_joint"] == 0.9
+    np.testing.assert_allclose(np.ptp(grasp.object.vertices, axis=0), [0.06, 0.1, 0.1])
+    resaved = json.loads(grasp.save(tmp_path / "again.json").read_text())
+    assert resaved == data
