@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 
 pytest.importorskip("distributed")
 pytest.importorskip("pyarrow")
@@ -280,3 +281,29 @@ def test_workers_with_other_code_fail_their_rows(manifest):
     assert [r["error"] for r in outcome["results"]] == ["BatchError", "BatchError"]
     assert "install the same exactgrasp" in outcome["results"][0]["message"]
     assert all(r["values"] is None for r in outcome["results"])
+
+
+def test_units_and_repair_override_the_grasp_files(tmp_path):
+    # A grasp file whose object mesh is in millimetres but says nothing about units.
+    box = trimesh.creation.box((60.0, 100.0, 100.0))
+    trimesh.Trimesh(box.vertices, box.faces[:-2], process=False).export(tmp_path / "box_mm.stl")
+    pose = np.eye(4)
+    pose[2, 3] = 0.11
+    record = eg.Grasp(hands.barrett(), objects.box((0.06, 0.1, 0.1)), pose).to_dict(tmp_path)
+    record.update(object="box_mm.stl")
+    (tmp_path / "g.json").write_text(json.dumps(record))
+    manifest = tmp_path / "manifest.jsonl"
+    manifest.write_text(json.dumps({"id": "g", "grasp": "g.json"}) + "\n")
+    as_is = _run(manifest, tmp_path / "as-is", workers=0)
+    assert as_is.failed == 1  # 100 m long, and open
+    with pytest.warns(UserWarning, match="repaired"):
+        fixed = _run(manifest, tmp_path / "fixed", workers=0, units="mm", repair=True)
+    assert fixed.done == 1
+    _, values, _ = read_batch(tmp_path / "fixed")
+    with pytest.warns(UserWarning, match="repaired"):
+        grasp = eg.Grasp.from_file(tmp_path / "g.json", units="mm", repair=True)
+    assert grasp.object.volume == pytest.approx(0.06 * 0.1 * 0.1, rel=1e-9)
+    expected = eg.compute_descriptor(grasp, SAMPLER, **BACKEND_PARAMS).values
+    np.testing.assert_allclose(np.asarray(values[0]).reshape(expected.shape), expected, rtol=1e-6)
+    with pytest.raises(BatchError, match="units must be one of"):
+        _run(manifest, tmp_path / "bad", workers=0, units="furlong")

@@ -41,6 +41,7 @@ from exactgrasp.batch.store import (
 )
 from exactgrasp.batch.worker import default_workers, open_pool
 from exactgrasp.errors import BatchError
+from exactgrasp.geometry.intake import UNITS
 from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.progress import progress_bar
@@ -147,6 +148,8 @@ def run_batch(
     part_size: int = DEFAULT_PART_SIZE,
     on_limit: str | None = None,
     retry_failed: bool = False,
+    units: str | None = None,
+    repair: bool | None = None,
 ) -> BatchSummary:
     """Compute the descriptor of every grasp in a manifest into a folder; resume if killed.
 
@@ -177,6 +180,10 @@ def run_batch(
         Overrides what grasp files say about joint values outside the limits.
     retry_failed : bool
         Compute again the parts that hold failed rows.
+    units : {"m", "cm", "mm", "inch", "in"}, optional
+        Overrides the grasp files' ``object_units``.
+    repair : bool, optional
+        Overrides the grasp files' ``object_repair``.
 
     Returns
     -------
@@ -198,11 +205,19 @@ def run_batch(
             raise BatchError(f"{name} must be an integer >= {low}, got {value!r}.")
     if on_limit not in (None, "error", "clip"):
         raise BatchError(f"on_limit must be 'error' or 'clip', got {on_limit!r}.")
+    if units is not None and units not in UNITS:
+        raise BatchError(f"units must be one of {sorted(UNITS)}, got {units!r}.")
+    if repair not in (None, True, False):
+        raise BatchError(f"repair must be True, False or None, got {repair!r}.")
+    given = (("units", units), ("repair", repair), ("on_limit", on_limit))
+    overrides = {key: value for key, value in given if value is not None}
     sampler = as_sampler(sampler)
     engine = get_backend(backend, **(backend_params or {}))
     spec = engine if isinstance(backend, Backend) else (backend, dict(backend_params or {}))
     manifest = read_manifest(manifest)
-    params = _run_params(manifest, engine, sampler, on_limit=on_limit, part_size=part_size)
+    params = _run_params(
+        manifest, engine, sampler, part_size=part_size, **{"on_limit": None, **overrides}
+    )
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     n_parts = -(-len(manifest.rows) // part_size)
@@ -221,7 +236,7 @@ def run_batch(
             with open_pool(workers, scheduler) as pool:
                 n_workers, compute_start = pool.workers, time.perf_counter()
                 expected = [params["exactgrasp_version"], params["backend_params"]]
-                task = (str(manifest.base_dir), spec, sampler.params, on_limit, expected)
+                task = (str(manifest.base_dir), spec, sampler.params, overrides, expected)
                 _compute(pool, todo, task, out, n_values, len(manifest.rows), skipped, progress)
                 compute_seconds = time.perf_counter() - compute_start
         done, failed = consolidate(out, n_parts, params)

@@ -57,10 +57,9 @@ def _worker_backend(spec: Backend | tuple[str, dict]) -> Backend:
     return shared_backend(name, **params)
 
 
-def _load_grasp(row: ManifestRow, base_dir: Path, on_limit: str | None) -> Grasp:
+def _load_grasp(row: ManifestRow, base_dir: Path, overrides: dict) -> Grasp:
     if row.problem is not None:
         raise BatchError(row.problem)
-    overrides = {} if on_limit is None else {"on_limit": on_limit}
     if isinstance(row.grasp, str):
         path = Path(row.grasp)
         return Grasp.from_file(path if path.is_absolute() else base_dir / path, **overrides)
@@ -74,7 +73,7 @@ def compute_rows(
     base_dir: str,
     backend: Backend | tuple[str, dict],
     sampler_params: dict,
-    on_limit: str | None = None,
+    overrides: dict | None = None,
     expected: list | None = None,
     single_thread: bool = True,
 ) -> dict[str, Any]:
@@ -89,8 +88,9 @@ def compute_rows(
         A backend, or its name and parameters (built once per worker process).
     sampler_params : dict
         `PathSampler.params`.
-    on_limit : {"error", "clip"} or None
-        Overrides the grasp files' ``on_limit``.
+    overrides : dict, optional
+        `Grasp.from_file` overrides of what the grasp files say (``units``, ``repair``,
+        ``on_limit``).
     expected : [str, dict], optional
         The exactgrasp version and backend parameters of the run; rows fail when this worker's
         differ.
@@ -129,7 +129,7 @@ def compute_rows(
         try:
             if mismatch:
                 raise BatchError(mismatch)
-            grasp = _load_grasp(row, Path(base_dir), on_limit)
+            grasp = _load_grasp(row, Path(base_dir), overrides or {})
             descriptor = compute_descriptor(grasp, sampler, engine, progress=False)
             # Timings differ run to run; the rest of the metadata is a function of the input.
             metadata = {k: v for k, v in descriptor.metadata.items() if k != "seconds"}

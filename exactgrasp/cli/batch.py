@@ -15,7 +15,12 @@ from typing import Any
 
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.batch.run import DEFAULT_PART_SIZE, run_batch
-from exactgrasp.cli.common import add_on_limit, add_progress, add_sampler, sampler_from_args
+from exactgrasp.cli.common import (
+    add_grasp_options,
+    add_progress,
+    add_sampler,
+    sampler_from_args,
+)
 from exactgrasp.cli.params import add_param, build_backend, split_params
 
 __all__ = ["add_parser", "cmd_batch"]
@@ -38,6 +43,8 @@ def cmd_batch(args: argparse.Namespace) -> int:
         part_size=args.part_size,
         on_limit=args.on_limit,
         retry_failed=args.retry_failed,
+        units=args.units,
+        repair=args.repair,
     )
     print(summary.text(), file=sys.stdout)
     return summary.exit_status
@@ -77,7 +84,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--retry-failed", action="store_true", help="compute the parts with failed rows again"
     )
-    add_on_limit(parser)
+    add_grasp_options(parser)
     add_progress(parser)
     parser.set_defaults(func=cmd_batch)
     return parser

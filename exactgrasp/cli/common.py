@@ -246,20 +246,10 @@ def read_grasp(
         As `Grasp.from_file`, with the fixes it names (grasp-file keys, Python arguments)
         spelled as the flags that make them.
     """
-    overrides = {k: v for k, v in (("repair", repair), ("on_limit", on_limit)) if v is not None}
+    given = (("units", units), ("repair", repair), ("on_limit", on_limit))
+    overrides = {key: value for key, value in given if value is not None}
     try:
-        if units is None:
-            return Grasp.from_file(path, **overrides)
-        path = Path(path)
-        try:
-            data = json.loads(path.read_text())
-        except (OSError, ValueError):
-            data = None
-        if not isinstance(data, dict):  # from_file says what is wrong with the file
-            return Grasp.from_file(path, **overrides)
-        # The object units are read from the file's keys, so the override replaces that key.
-        data["object_units"] = units
-        return Grasp.from_dict(data, base_dir=path.parent, source=str(path), **overrides)
+        return Grasp.from_file(path, **overrides)
     except ExactGraspError as exc:
         message = flag_message(str(exc), FILE_KEYS_TO_FLAGS)
         if message == str(exc):

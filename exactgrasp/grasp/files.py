@@ -150,7 +150,7 @@ def read_object(data: dict, base_dir: Path, source: str, overrides: dict) -> Sol
     try:
         return Solid.from_file(
             path,
-            units=data.get("object_units", "m"),
+            units=overrides.get("units", data.get("object_units", "m")),
             repair=repair,
             surface_samples=samples,
         )

@@ -157,8 +157,10 @@ class Grasp:
         ----------
         path : path-like
         **overrides
-            ``repair`` (object repair), ``on_limit`` (``"error"``/``"clip"``),
-            ``surface_samples`` (path or array) override what the file says.
+            ``units`` (the object's), ``repair`` (object repair), ``on_limit``
+            (``"error"``/``"clip"``), ``surface_samples`` (path or array) override what the
+            file says (``object_units``, ``object_repair``, ``on_limit``,
+            ``object_surface_samples``).
 
         Returns
         -------
