@@ -367,6 +367,7 @@ def test_repair_overrides_the_grasp_file(tmp_path, capsys):
     argv = ["descriptor", str(holed), "--sampler", TINY, "--steps", "2", *COARSE]
     err = _error(capsys, [*argv, "-o", str(tmp_path / "x.npz")])
     assert "not a closed surface" in err and "pass --repair" in err
+    assert '(or set "object_repair": true in the grasp file)' in err
     assert main([*argv, "-o", str(tmp_path / "r.npz"), "--repair"]) == 0
     assert eg.Descriptor.load(tmp_path / "r.npz").values.max() > 0
 

@@ -53,9 +53,8 @@ def _file_key_fixes(key: str, value: str, flag: str) -> tuple[tuple[str, str], .
     """How a grasp file's error spells the fix ``key: value``, and the flag that makes it."""
     spelled = f"{json.dumps(key)}: {value}"
     return (
-        (f"set {spelled} in the grasp file", f"pass {flag}"),
-        (f"Set {spelled} in the grasp file", f"Pass {flag}"),
-        (spelled, flag),
+        (f"set {spelled} in the grasp file", f"pass {flag} (or set {spelled} in the grasp file)"),
+        (f"Set {spelled} in the grasp file", f"Pass {flag} (or set {spelled} in the grasp file)"),
     )
 
 
