@@ -178,7 +178,7 @@ def test_sampler_from_a_json_file(grasp_file, tmp_path):
         (["--sampler", "sideways"], r"--sampler 'sideways': not a preset"),
         (["--sampler", "{not json"], r"--sampler '\{not json': not valid JSON"),
         (["--sampler", "[1, 2]"], r"--sampler '\[1, 2\]': not a preset"),
-        (["--sampler", '{"n_paths": 3}'], r"unknown parameter\(s\) n_paths; a sampler takes"),
+        (["--sampler", '{"n_paths": 3}'], r"unknown parameter\(s\) n_paths; use a preset"),
         (["--sampler", '{"n_axes": 0}'], r"--sampler .*n_axes must be a positive integer"),
         (["--steps", "0"], r"--steps must be a positive number"),
     ],

@@ -158,3 +158,19 @@ def test_as_sampler_takes_every_form():
 def test_as_sampler_refuses_with_the_accepted_forms(value, n_steps, message):
     with pytest.raises(SamplerError, match=message):
         as_sampler(value, n_steps=n_steps)
+
+
+def test_as_sampler_reads_a_json_file(tmp_path):
+    from exactgrasp.paths import as_sampler
+
+    params = {"n_translations": 4, "n_axes": 2, "n_amounts": 2, "n_steps": 3}
+    path = tmp_path / "sampler.json"
+    path.write_text(json.dumps(params))
+    for value in (path, str(path)):
+        sampler = as_sampler(value, n_steps=5)
+        assert (sampler.n_steps, sampler.params["n_translations"]) == (5, 4)
+    with pytest.raises(SamplerError, match="cannot be read"):
+        as_sampler(tmp_path / "missing.json")
+    path.write_text("[1, 2]")
+    with pytest.raises(SamplerError, match="not a JSON object"):
+        as_sampler(path)

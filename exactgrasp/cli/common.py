@@ -14,13 +14,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 from pathlib import Path
-from typing import Any
 
 from exactgrasp.errors import ExactGraspError, SamplerError
 from exactgrasp.geometry.intake import UNITS
 from exactgrasp.grasp import Grasp
-from exactgrasp.paths.presets import DEFAULT_PRESET, SAMPLER_PARAMETERS, as_sampler
+from exactgrasp.paths.presets import DEFAULT_PRESET, SAMPLER_PARAMETERS, accepted_forms, as_sampler
 from exactgrasp.paths.sampler import PRESETS, PathSampler
 
 __all__ = [
@@ -120,37 +120,6 @@ def add_sampler(parser: argparse.ArgumentParser) -> None:
     add_steps(parser)
 
 
-def _sampler_value(text: str) -> str | dict[str, Any]:
-    """``--sampler`` as a preset name or a parameter dict (JSON text or a JSON file read)."""
-    stripped = text.lstrip()
-    if not stripped.startswith("{"):
-        if text in PRESETS:
-            return text
-        if not Path(text).is_file():
-            raise SamplerError(
-                f"--sampler {text!r}: not a preset, JSON text or a JSON file; {_sampler_forms()}."
-            )
-        try:
-            stripped = Path(text).read_text()
-        except OSError as exc:
-            raise SamplerError(f"--sampler {text!r}: cannot read the file ({exc}).") from exc
-    try:
-        value = json.loads(stripped)
-    except json.JSONDecodeError as exc:
-        raise SamplerError(
-            f"--sampler {text!r}: not valid JSON ({exc}); {_sampler_forms()}."
-        ) from exc
-    if not isinstance(value, dict):
-        raise SamplerError(f"--sampler {text!r}: not a JSON object; {_sampler_forms()}.")
-    unknown = sorted(str(k) for k in value if k not in SAMPLER_PARAMETERS)
-    if unknown:
-        raise SamplerError(
-            f"--sampler {text!r}: unknown parameter(s) {', '.join(unknown)}; a sampler takes "
-            f"{', '.join(SAMPLER_PARAMETERS)}."
-        )
-    return value
-
-
 def sampler_from_args(args: argparse.Namespace) -> PathSampler:
     """The sampler of ``--sampler`` and ``--steps``, through `exactgrasp.paths.as_sampler`.
 
@@ -160,14 +129,24 @@ def sampler_from_args(args: argparse.Namespace) -> PathSampler:
         Naming ``--steps`` or ``--sampler`` and what each accepts.
     """
     steps = getattr(args, "steps", None)
+    text = getattr(args, "sampler", None)
+    if text is not None and text not in PRESETS and not text.lstrip().startswith("{"):
+        if not Path(text).is_file():
+            raise SamplerError(
+                f"--sampler {text!r}: not a preset, JSON text or a JSON file; {_sampler_forms()}."
+            )
+        text_or_file = Path(text)
+    else:
+        text_or_file = text
     if steps is not None and steps < 1:
         raise SamplerError(f"--steps must be a positive number of poses per path, got {steps}.")
-    text = getattr(args, "sampler", None)
-    value = None if text is None else _sampler_value(text)
     try:
-        return as_sampler(value, n_steps=steps)
+        return as_sampler(text_or_file, n_steps=steps)
     except SamplerError as exc:
-        raise SamplerError(f"--sampler {text!r}: {exc}") from exc
+        # The library's message names the value and the Python forms; here, the flag's.
+        reason = str(exc).replace(accepted_forms(), _sampler_forms())
+        reason = re.sub(r"^sampler (file )?('[^']*'|\{.*?\}): ", "", reason)
+        raise SamplerError(f"--sampler {text!r}: {reason}") from exc
 
 
 # -- --progress ------------------------------------------------------------------------------

@@ -12,12 +12,14 @@ from __future__ import annotations
 
 import inspect
 import json
+import os
+from pathlib import Path
 from typing import Any
 
 from exactgrasp.errors import SamplerError
 from exactgrasp.paths.sampler import PRESETS, PathSampler
 
-__all__ = ["DEFAULT_PRESET", "PRESETS", "SAMPLER_PARAMETERS", "as_sampler"]
+__all__ = ["DEFAULT_PRESET", "PRESETS", "SAMPLER_PARAMETERS", "accepted_forms", "as_sampler"]
 
 #: The preset used when no sampler is given.
 DEFAULT_PRESET = "balanced"
@@ -26,11 +28,13 @@ DEFAULT_PRESET = "balanced"
 SAMPLER_PARAMETERS = tuple(inspect.signature(PathSampler.__init__).parameters)[1:]
 
 
-def _accepted() -> str:
+def accepted_forms() -> str:
+    """What `as_sampler` accepts, in words (ends its error messages)."""
     return (
         f"give None (the {DEFAULT_PRESET!r} preset), a PathSampler, a preset name "
         f"({', '.join(sorted(PRESETS))}), a dict of PathSampler parameters "
-        f"({', '.join(SAMPLER_PARAMETERS)}) or the JSON text of one"
+        f"({', '.join(SAMPLER_PARAMETERS)}), the JSON text of one or the path of a .json "
+        "file holding it"
     )
 
 
@@ -39,13 +43,14 @@ def as_sampler(value: Any = None, n_steps: int | None = None) -> PathSampler:
 
     Parameters
     ----------
-    value : None or PathSampler or str or dict
+    value : None or PathSampler or str or os.PathLike or dict
         None: the ``"balanced"`` preset. A `PathSampler`: itself. A str: a preset name
         (``"balanced"``, ``"translations"``, ``"rotations"``) or, when it starts with ``{``,
-        JSON text of `PathSampler.params`. A dict: `PathSampler.params`.
+        JSON text of `PathSampler.params`. A path ending in ``.json``: a file holding that
+        JSON. A dict: `PathSampler.params`.
     n_steps : int, optional
-        Poses per path, replacing the preset's or the parameters' ``n_steps``. Not allowed
-        with a `PathSampler` whose ``n_steps`` differs (it is already built).
+        Poses per path, replacing the preset's or the parameters' ``n_steps``. Not
+        allowed with a `PathSampler` whose ``n_steps`` differs (it is already built).
 
     Returns
     -------
@@ -57,6 +62,18 @@ def as_sampler(value: Any = None, n_steps: int | None = None) -> PathSampler:
         Any other type, an unknown preset, invalid JSON, unknown or invalid parameters; the
         message names the value and the accepted forms.
     """
+    if isinstance(value, os.PathLike) or (
+        isinstance(value, str) and value not in PRESETS and value.endswith(".json")
+    ):
+        file = Path(value)
+        try:
+            value = file.read_text()
+        except OSError as exc:
+            raise SamplerError(f"sampler file {str(file)!r}: cannot be read ({exc}).") from exc
+        if not value.lstrip().startswith("{"):
+            raise SamplerError(
+                f"sampler file {str(file)!r}: not a JSON object; {accepted_forms()}."
+            )
     if isinstance(value, PathSampler):
         if n_steps is not None and n_steps != value.n_steps:
             raise SamplerError(
@@ -73,20 +90,21 @@ def as_sampler(value: Any = None, n_steps: int | None = None) -> PathSampler:
             params = json.loads(value)
         except json.JSONDecodeError as exc:
             raise SamplerError(
-                f"sampler {value!r}: not valid JSON ({exc}); {_accepted()}."
+                f"sampler {value!r}: not valid JSON ({exc}); {accepted_forms()}."
             ) from exc
         if not isinstance(params, dict):
-            raise SamplerError(f"sampler {value!r}: not a JSON object; {_accepted()}.")
+            raise SamplerError(f"sampler {value!r}: not a JSON object; {accepted_forms()}.")
         value = params
     if isinstance(value, str):
         if value not in PRESETS:
-            raise SamplerError(f"unknown preset {value!r}; {_accepted()}.")
+            raise SamplerError(f"unknown preset {value!r}; {accepted_forms()}.")
         return PathSampler.preset(value, **overrides)
     if isinstance(value, dict):
         unknown = sorted(str(k) for k in value if k not in SAMPLER_PARAMETERS)
         if unknown:
             raise SamplerError(
-                f"sampler {value!r}: unknown parameter(s) {', '.join(unknown)}; {_accepted()}."
+                f"sampler {value!r}: unknown parameter(s) {', '.join(unknown)}; "
+                f"{accepted_forms()}."
             )
         return PathSampler.from_params({**value, **overrides})
-    raise SamplerError(f"sampler {value!r} is a {type(value).__name__}; {_accepted()}.")
+    raise SamplerError(f"sampler {value!r} is a {type(value).__name__}; {accepted_forms()}.")

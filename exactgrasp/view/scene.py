@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -20,7 +19,7 @@ import numpy as np
 from exactgrasp.errors import SamplerError
 from exactgrasp.geometry.se3 import exp_se3
 from exactgrasp.grasp.grasp import Grasp
-from exactgrasp.paths.presets import PRESETS, as_sampler
+from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
 
 #: Trace name of the object (hand links keep their own names).
@@ -172,12 +171,12 @@ def resolve_sampler(
     name: str = "sampler",
     steps_name: str = "steps",
 ) -> PathSampler:
-    """The sampler to draw, from what `exactgrasp.paths.presets.as_sampler` accepts or a file.
+    """The sampler to draw, from what `exactgrasp.paths.presets.as_sampler` accepts.
 
     Parameters
     ----------
     sampler : None or PathSampler or str or dict
-        As `as_sampler`; a str may also be the path of a JSON file holding the parameters.
+        As `as_sampler` (a preset, parameters, their JSON text or a ``.json`` file).
     steps : int, optional
         Poses per path, replacing the sampler's ``n_steps``.
     name, steps_name : str
@@ -188,25 +187,10 @@ def resolve_sampler(
     -------
     PathSampler
     """
-    if steps is not None and (
-        isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 1
-    ):
-        raise SamplerError(
-            f"{steps_name} must be a positive number of poses per path, got {steps!r}."
-        )
-    if isinstance(sampler, str | os.PathLike):
-        text = os.fspath(sampler)
-        file = Path(text)
-        if text not in PRESETS and not text.lstrip().startswith("{") and file.suffix == ".json":
-            if not file.is_file():
-                raise SamplerError(f"{name} {text!r}: no such JSON file.")
-            sampler = file.read_text()
-        else:
-            sampler = text
     try:
         return as_sampler(sampler, n_steps=steps)
     except (SamplerError, TypeError) as exc:
-        message = str(exc)
+        message = str(exc).replace("n_steps", steps_name)
         raise SamplerError(message if message.startswith(name) else f"{name}: {message}") from exc
 
 
