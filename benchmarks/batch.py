@@ -3,8 +3,9 @@
 Builds a manifest of ``--grasps`` grasps of the built-in Barrett hand (finger joints and object
 poses varied, objects from the built-in box and cylinder, one object file each, so the workers
 read files as a real dataset would) or, with ``--data real``, of the 34 real cereal-box grasps
-in ``../shared/data/barrett-grasps/grasps/`` (cycled to ``--grasps``), then runs
-`exactgrasp.batch.run_batch` into a fresh folder for each worker count.
+in ``barrett-grasps/grasps/`` of the shared data folder (`exactgrasp.datapath.data_dir`;
+cycled to ``--grasps``), then runs `exactgrasp.batch.run_batch` into a fresh folder for each
+worker count.
 
 Reported per worker count:
 
@@ -38,8 +39,9 @@ import numpy as np
 
 import exactgrasp as eg
 from exactgrasp.batch import run_batch
+from exactgrasp.datapath import data_dir
 
-SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+SHARED_DATA = data_dir()
 
 
 def builtin_manifest(folder: Path, n_grasps: int) -> Path:

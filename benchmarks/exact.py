@@ -10,7 +10,8 @@ up to 20 % from one run to the next), the two alternating.
     python benchmarks/exact.py [--poses-subsample 40] [--n-jobs 2] [--broadphase coal]
                                [--repeat 3] [--json results.json]
 
-Needs ``../shared/data`` (relative to the repository); skips with a message when it is absent.
+Needs the shared data folder (``$EXACTGRASP_DATA``, else ``../shared/data`` beside the
+repository); skips with a message when it is absent.
 """
 
 from __future__ import annotations
@@ -24,7 +25,10 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT / ".." / "shared" / "data"
+sys.path.insert(0, str(ROOT))
+from exactgrasp.datapath import data_dir  # noqa: E402
+
+DATA = data_dir()
 GRASPS = (
     "barrett-grasps/noise/spray_bottle_base.json",
     "barrett-grasps/grasps/obj5_sub4_grasp1_optimal0_target.json",
@@ -61,12 +65,12 @@ def main(argv: list[str] | None = None) -> int:
         "--grasps",
         nargs="*",
         default=list(GRASPS),
-        help="grasp JSON files relative to ../shared/data",
+        help=f"grasp JSON files relative to the shared data folder ({DATA})",
     )
     ap.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
     args = ap.parse_args(argv)
     if not DATA.is_dir():
-        print(f"skipped: real data not found at {DATA.resolve()} (../shared/data)")
+        print(f"skipped: real data not found at {DATA.resolve()} (set EXACTGRASP_DATA)")
         return 0
     sys.path.insert(0, str(ROOT))
     from exactgrasp.backends.exact import ExactIntersector, agrees, plain_volumes

@@ -16,7 +16,8 @@ and 5 mm towards the palm (-z in the hand frame), and the first recorded study g
 
     python benchmarks/penetration.py [--repeat 3] [--offsets 8] [--stack 256] [--json out.json]
 
-Needs ``../shared/data`` (relative to the repository); skips with a message when it is absent.
+Needs the shared data folder (``$EXACTGRASP_DATA``, else ``../shared/data`` beside the
+repository); skips with a message when it is absent.
 """
 
 from __future__ import annotations
@@ -34,7 +35,10 @@ import numpy as np
 import trimesh
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT / ".." / "shared" / "data"
+sys.path.insert(0, str(ROOT))
+from exactgrasp.datapath import data_dir  # noqa: E402
+
+DATA = data_dir()
 PUSHED = (
     "barrett-grasps/grasps/obj5_sub4_grasp1_optimal0_target.json",
     "barrett-grasps/grasps/obj5_sub5_grasp5_optimal0_target.json",
@@ -290,7 +294,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", default=None, help="also write the rows to this file")
     args = ap.parse_args(argv)
     if not (DATA / "barrett-grasps").is_dir():
-        print(f"skipped: shared data not found at {DATA.resolve()}")
+        print(f"skipped: shared data not found at {DATA.resolve()} (set EXACTGRASP_DATA)")
         return 0
     from exactgrasp.overlap import intersection_volume
 

@@ -134,14 +134,15 @@ def compare_backends(
     names = [b.name for b in instances]
     labels = [f"{n}{i}" if names.count(n) > 1 else n for i, n in enumerate(names)]
     poses = sampler.poses()
-    hand_volume = grasp.canonical_hand_volume
-    values: dict[str, np.ndarray] = {}
+    volumes: dict[str, np.ndarray] = {}
     seconds: dict[str, float] = {}
     for label, backend in zip(labels, instances, strict=True):
         start = time.perf_counter()
-        volumes = compute_volumes(grasp, poses, backend, progress, f"{label} poses")
+        volumes[label] = compute_volumes(grasp, poses, backend, progress, f"{label} poses")
         seconds[label] = time.perf_counter() - start
-        values[label] = volumes.ravel() / hand_volume
+    # One denominator for every backend: the reference's hand volume (its own union, if any).
+    hand_volume = float(instances[-1].hand_volume(grasp))
+    values = {label: v.ravel() / hand_volume for label, v in volumes.items()}
 
     table = sampler.paths
     n_paths, n_steps = sampler.n_paths, sampler.n_steps

@@ -13,7 +13,9 @@ import numpy as np
 from scipy.spatial.distance import pdist, squareform
 
 from exactgrasp.backends import Backend, get_backend
+from exactgrasp.backends.base import check_poses, repeated_poses
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
+from exactgrasp.diagnostics import check_descriptor
 from exactgrasp.errors import DescriptorError
 from exactgrasp.grasp import Grasp
 from exactgrasp.paths.presets import as_sampler
@@ -32,7 +34,9 @@ class Descriptor:
         Intersection volume / hand volume at each pose (dimensionless, >= 0).
     metadata : dict
         How it was made: ``sampler``, ``backend``, ``backend_params``, ``version``,
-        ``hand_hash``, ``object_hash``, ``grasp``, ``hand_volume``, ``seconds``, ...
+        ``hand_hash``, ``object_hash``, ``grasp``, ``hand_volume``, ``seconds``, and the
+        checks of `exactgrasp.diagnostics.check_descriptor` (``max_value``,
+        ``volume_ratio``, ``warnings``, ...).
 
     Attributes
     ----------
@@ -107,23 +111,29 @@ def compute_volumes(
     progress: bool | None = None,
     description: str = "poses",
 ) -> np.ndarray:
-    """Backend volumes for (n_paths, n_steps, 4, 4) poses, in chunks of paths for a progress bar.
+    """Backend volumes for (..., 4, 4) poses, each distinct pose computed once, with a bar.
+
+    Poses equal to rounding (`backends.base.repeated_poses`: the balanced preset repeats a
+    quarter of its poses) go to the backend once, all in one
+    `Backend.volumes_with_progress` call that feeds the bar.
 
     Returns
     -------
     numpy.ndarray, shape poses.shape[:-2], canonical volume units
     """
-    n_paths = poses.shape[0]
-    chunk = max(1, n_paths // 20)
-    out = np.empty(poses.shape[:-2])
-    with progress_bar(
-        total=int(np.prod(poses.shape[:-2])), desc=description, enable=progress
-    ) as bar:
-        for start in range(0, n_paths, chunk):
-            block = poses[start : start + chunk]
-            out[start : start + chunk] = backend.volumes(grasp, block)
-            bar.update(int(np.prod(block.shape[:-2])))
-    return out
+    poses = check_poses(poses)
+    flat = poses.reshape(-1, 4, 4)
+    first, back = np.unique(repeated_poses(flat), return_inverse=True)
+    with progress_bar(total=len(first), desc=description, enable=progress) as bar:
+        advance = None if bar.disable else bar.update
+        volumes = backend.volumes_with_progress(grasp, flat[first], advance)
+    volumes = np.asarray(volumes, dtype=np.float64)
+    if volumes.shape != (len(first),):
+        raise DescriptorError(
+            f"backend {backend.name!r} returned volumes of shape {volumes.shape} for "
+            f"{len(first)} poses; this is a bug in the backend, please report it."
+        )
+    return volumes[back.reshape(-1)].reshape(poses.shape[:-2])
 
 
 def compute_descriptor(
@@ -158,7 +168,8 @@ def compute_descriptor(
     backend = get_backend(backend, **backend_params)
     start = time.perf_counter()
     volumes = compute_volumes(grasp, sampler.poses(), backend, progress, f"{backend.name} poses")
-    hand_volume = grasp.canonical_hand_volume
+    # The backend's own union where it has one (the exact backend's), not a second one.
+    hand_volume = float(backend.hand_volume(grasp))
     if not np.all(np.isfinite(volumes)) or np.any(volumes < 0):
         bad = int(np.sum(~np.isfinite(volumes) | (volumes < 0)))
         raise DescriptorError(
@@ -176,11 +187,14 @@ def compute_descriptor(
         "object_hash": grasp.object.hash,
         "geometry_hash": grasp.geometry_key,
         "hand_volume_canonical": hand_volume,
-        "hand_volume_m3": grasp.hand.volume,
+        "hand_volume_m3": hand_volume / grasp.frame.scale**3,
         "frame": grasp.frame.to_dict(),
         "seconds": seconds,
     }
-    return Descriptor(volumes / hand_volume, metadata)
+    values = volumes / hand_volume
+    # Warn once about suspicious grasps and record the checks (docs/diagnostics.md).
+    metadata.update(check_descriptor(grasp, values, backend, metadata["hand_volume_m3"]))
+    return Descriptor(values, metadata)
 
 
 def _check_comparable(a: Descriptor, b: Descriptor) -> None:

@@ -8,16 +8,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from exactgrasp.datapath import data_dir
+
 os.environ.setdefault("EXACTGRASP_NO_PROGRESS", "1")
 
-#: ``../shared/data`` beside the repository (``EXACTGRASP_DATA`` overrides it).
-SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+#: ``$EXACTGRASP_DATA``, else ``../shared/data`` beside the repository (`data_dir`).
+SHARED_DATA = data_dir()
 
 
 @pytest.fixture(scope="session")
 def shared_data() -> Path:
     if not (SHARED_DATA / "osu-objects").is_dir():
-        pytest.skip(f"shared data not found at {SHARED_DATA} (the authors' objects and grasps)")
+        pytest.skip(
+            f"shared data not found at {SHARED_DATA} (the authors' objects and grasps; "
+            "set EXACTGRASP_DATA to its folder)"
+        )
     return SHARED_DATA
 
 

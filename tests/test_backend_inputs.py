@@ -120,8 +120,8 @@ BAD_OPTIONS = [
     ({"object_cell": "fine"}, f"object_cell {CELL} 'fine'"),
     ({"capacity": -5}, "capacity must be a positive integer, got -5 .edge crossings"),
     ({"capacity": 2.5}, "capacity must be a positive integer, got 2.5"),
-    ({"n_jobs": 0}, "n_jobs must be a positive integer or -1, got 0"),
-    ({"n_jobs": True}, "n_jobs must be a positive integer or -1, got True"),
+    ({"n_jobs": 0}, "n_jobs must be a positive integer, -1 or None, got 0"),
+    ({"n_jobs": True}, "n_jobs must be a positive integer, -1 or None, got True"),
     ({"broadphase": "bullet"}, "broadphase must be 'coal', 'fcl' or None, got 'bullet'"),
     ({"cell": 0.1}, r"unknown parameters \['cell'\]; it takes broadphase, n_jobs, hand_cell"),
 ]
@@ -157,7 +157,7 @@ def test_checked_options_become_plain_numbers_in_params():
     assert [type(v) for v in be.params.values()] == [type(None), int, int, float]
     assert ExactBackend(broadphase=None, object_cell=None).params == {
         "broadphase": None,
-        "n_jobs": 1,
+        "n_jobs": None,
     }
     voxel = VoxelBackend(hand_resolution=np.int64(20), surface_spacing=np.float32(2))
     assert type(voxel.params["hand_resolution"]) is int

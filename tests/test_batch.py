@@ -108,7 +108,8 @@ def test_two_worker_local_cluster(run_two, manifest):
     out, summary = run_two
     assert summary.workers == 2
     assert (summary.done, summary.failed, summary.computed) == (len(GOOD), len(BAD), 11)
-    ids, values, metadata = read_batch(out)
+    batch = read_batch(out)
+    ids, values, metadata = batch.ids, batch.values, batch.metadata
     assert ids == GOOD
     assert values.shape == (len(GOOD), SAMPLER.n_paths, SAMPLER.n_steps)
     assert all("seconds" not in m for m in metadata)
@@ -136,7 +137,8 @@ def test_bad_rows_are_reported_and_never_written(run_two):
     messages = {line["id"]: line["message"] for line in lines}
     assert "nowhere.json" in messages["missing-file"]
     assert "finger_1_med_joint" in messages["bad-joint"]
-    ids, values, _ = read_batch(out)
+    batch = read_batch(out)
+    ids, values = batch.ids, batch.values
     assert not set(ids) & set(BAD)
     assert np.all(np.isfinite(values))
 
@@ -299,7 +301,7 @@ def test_units_and_repair_override_the_grasp_files(tmp_path):
     with pytest.warns(UserWarning, match="repaired"):
         fixed = _run(manifest, tmp_path / "fixed", workers=0, units="mm", repair=True)
     assert fixed.done == 1
-    _, values, _ = read_batch(tmp_path / "fixed")
+    values = read_batch(tmp_path / "fixed").values
     with pytest.warns(UserWarning, match="repaired"):
         grasp = eg.Grasp.from_file(tmp_path / "g.json", units="mm", repair=True)
     assert grasp.object.volume == pytest.approx(0.06 * 0.1 * 0.1, rel=1e-9)

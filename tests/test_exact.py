@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import itertools
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,9 +18,10 @@ from exactgrasp.backends.exact import (
     plain_volumes,
     repeated_poses,
 )
+from exactgrasp.datapath import data_dir
 from exactgrasp.errors import BackendError, MeshError, MissingDependencyError
 
-DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+DATA = data_dir()
 
 
 def box(lo, hi):
@@ -287,7 +287,7 @@ def test_backend_validates_parameters(monkeypatch):
     monkeypatch.setitem(sys.modules, "coal", None)  # makes `import coal` fail
     with pytest.raises(MissingDependencyError, match="coal"):
         ExactBackend(broadphase="coal")
-    assert ExactBackend(broadphase=None).params == {"broadphase": None, "n_jobs": 1}
+    assert ExactBackend(broadphase=None).params == {"broadphase": None, "n_jobs": None}
 
 
 class _FakeGrasp:
@@ -318,7 +318,7 @@ def test_backend_caches_geometry_per_grasp():
 
 
 @pytest.mark.skipif(
-    not (DATA / "barrett-grasps").is_dir(), reason="real Barrett data (../shared/data) not present"
+    not (DATA / "barrett-grasps").is_dir(), reason=f"real Barrett data not found at {DATA}"
 )
 def test_real_spray_bottle_grasp_matches_plain_boolean():
     from exactgrasp import Grasp, PathSampler

@@ -3,17 +3,17 @@
 import gzip
 import json
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 pytest.importorskip("mujoco", reason="the models extra (mujoco) is not installed")
 
+from exactgrasp.datapath import data_dir
 from exactgrasp.errors import JointError, ModelError
 from exactgrasp.hands import PalmSpec, load_model
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "barrett-grasps"
+DATA = data_dir() / "barrett-grasps"
 URDF = DATA / "hand" / "barrett.urdf"
 needs_data = pytest.mark.skipif(
     not URDF.is_file(), reason=f"shared Barrett data not found at {DATA} (FK checks need it)"

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-import numba
+import hashlib
+
 import numpy as np
 import pytest
 import trimesh
 
+from exactgrasp.backends.base import thread_limit
 from exactgrasp.backends.voxel import (
     VoxelBackend,
     estimate_counts,
@@ -14,20 +16,41 @@ from exactgrasp.backends.voxel import (
     estimate_volumes,
     estimate_volumes_numpy,
 )
-from exactgrasp.backends.voxel.grids import hand_occupancy, occupancy_grid
-from exactgrasp.backends.voxel.points import object_points, poisson_disk_surface, surface_area
+from exactgrasp.backends.voxel.grids import (
+    hand_occupancy,
+    occupancy_grid,
+    summed_table,
+    tile_any,
+)
+from exactgrasp.backends.voxel.points import (
+    dart_throw,
+    object_points,
+    point_tree,
+    poisson_disk_surface,
+    surface_area,
+)
 from exactgrasp.errors import BackendError
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.geometry.winding import winding_inside_lattice
 from tests.conftest import box_arrays
 
 
+def content_key(*arrays):
+    """A hash of arrays, standing in for `Grasp`'s geometry hashes."""
+    digest = hashlib.sha256()
+    for array in arrays:
+        if array is not None:
+            digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
+    return digest.hexdigest()
+
+
 class ArrayGrasp:
     """The part of `Grasp` a backend reads, over plain arrays."""
 
-    def __init__(self, links, bodies, samples=None, key="g"):
+    def __init__(self, links, bodies, samples=None):
         self.links, self.bodies, self.samples = links, bodies, samples
-        self.hand_key, self.object_key = f"hand-{key}", f"object-{key}"
+        self.hand_key = content_key(*(array for link in links for array in link))
+        self.object_key = content_key(*(array for body in bodies for array in body), samples)
 
     def canonical_hand_links(self):
         return self.links
@@ -112,6 +135,41 @@ def test_sphere_grid_volume():
     assert grid.values.sum() * grid.spacing**3 == pytest.approx(4 / 3 * np.pi, rel=0.01)
 
 
+def box_sum(table, lo, hi):
+    """Sum over the box ``lo:hi`` from a summed table, in the table's wrap-around arithmetic."""
+    total = 0
+    for corner in np.ndindex(2, 2, 2):
+        index = tuple(h if c else low for low, h, c in zip(lo, hi, corner, strict=True))
+        total += (-1) ** (3 - sum(corner)) * int(table[index])
+    return total % 2**64
+
+
+@pytest.mark.parametrize("resolution", [30, 300])
+def test_hand_tables_count_occupied_and_full_tiles(resolution):
+    hand = hand_occupancy([sphere(1.0, subdivisions=3)], resolution)
+    codes, shift = hand.cell_codes, hand.tile_shift
+    assert hand.grid.values[[0, -1]].sum() == hand.grid.values[:, [0, -1]].sum() == 0
+    assert max(-(-n >> shift) for n in codes.shape) <= 128 and (shift > 0) == (resolution > 128)
+    occupied = tile_any(codes != 0, 1 << shift)
+    full = ~tile_any(codes != 255, 1 << shift)
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        lo = [rng.integers(0, n) for n in occupied.shape]
+        hi = [rng.integers(a + 1, n + 1) for a, n in zip(lo, occupied.shape, strict=True)]
+        box = tuple(slice(a, b) for a, b in zip(lo, hi, strict=True))
+        total = box_sum(hand.tiles, lo, hi)
+        assert total & 0xFFFFFFFF == occupied[box].sum()
+        assert total >> 32 == full[box].sum()
+
+
+def test_summed_table():
+    values = np.random.default_rng(1).integers(0, 3, (4, 5, 6)).astype(np.uint64)
+    table = summed_table(values)
+    assert table.shape == (5, 6, 7) and table.dtype == np.uint64
+    assert table[4, 5, 6] == values.sum() and table[2, 3, 1] == values[:2, :3, :1].sum()
+    assert not table[0].any() and not table[:, 0].any() and not table[..., 0].any()
+
+
 # -- surface samples --------------------------------------------------------------------------
 
 
@@ -128,6 +186,25 @@ def test_poisson_disk_samples_are_spaced_on_surface_and_seeded():
     assert on_face.all()
     # About 0.565 samples per spacing**2 of area (the calibration behind the default count).
     assert len(points) == pytest.approx(0.565 * surface_area(triangles) / 0.01, rel=0.1)
+
+
+def greedy_disk_indices(points, spacing):
+    """Points accepted in order when no accepted point is closer than `spacing` (plain)."""
+    accepted = []
+    for index, point in enumerate(points):
+        if all(np.sum((point - points[other]) ** 2) >= spacing**2 for other in accepted):
+            accepted.append(index)
+    return np.array(accepted, np.int64)
+
+
+@pytest.mark.parametrize("extent", [(1.0, 1.0, 1.0), (200.0, 0.01, 0.01), (5.0, 3.0, 0.0)])
+def test_dart_throwing_is_the_plain_greedy_rule(extent):
+    # The last two need cells wider than one spacing (a sparse extent) or have a flat side.
+    points = np.random.default_rng(2).random((600, 3)) * extent
+    for spacing in (0.05, 0.3):
+        np.testing.assert_array_equal(
+            dart_throw(points, spacing), greedy_disk_indices(points, spacing)
+        )
 
 
 def test_default_sample_count_is_near_the_authors():
@@ -190,16 +267,52 @@ def test_numba_and_numpy_counts_are_identical():
     )
 
 
+def test_point_tree_partitions_the_points_by_kind():
+    interior = np.random.default_rng(3).random((500, 3)) * 2
+    surface = np.random.default_rng(4).random((300, 3)) * 2 - 0.5
+    tree = point_tree([interior, surface], np.zeros(3), 0.1, levels=(8, 4, 2))
+    points, boxes, ranges = tree["points"], tree["node_boxes"], tree["node_ranges"]
+    np.testing.assert_array_equal(np.sort(points[:500], axis=0), np.sort(interior, axis=0))
+    np.testing.assert_array_equal(np.sort(points[500:], axis=0), np.sort(surface, axis=0))
+    roots, first_leaf = tree["n_roots"], tree["first_leaf"]
+    # The roots, and every node's children, tile its points in order.
+    assert ranges[0, 0] == 0 and ranges[roots - 1, 1] == len(points)
+    assert np.array_equal(ranges[1:roots, 0], ranges[: roots - 1, 1])
+    for node, (start, end, child_start, child_end) in enumerate(ranges):
+        inside = points[start:end]
+        assert start < end and (end <= 500 or start >= 500), "a node holds one kind"
+        assert np.all(np.abs(inside - boxes[:3, node]) <= boxes[3:, node] + 1e-15)
+        if node < first_leaf:
+            assert child_start < child_end
+            assert ranges[child_start, 0] == start and ranges[child_end - 1, 1] == end
+        else:
+            assert child_start == child_end == 0
+
+
+@pytest.mark.parametrize("hand_resolution", [40, 200])
+def test_numba_and_numpy_counts_agree_across_the_grid_border(hand_resolution):
+    # Poses that put the object across every face of the hand grid, and fine grids whose
+    # tables tile several cells together.
+    hand = hand_occupancy(
+        [sphere(0.9, subdivisions=3), box_arrays([-1.0, -0.2, -1.0], [1.0, 0.2, -0.4])],
+        hand_resolution,
+    )
+    obj = object_points([sphere(0.7, (0.2, 0, 0), subdivisions=3)], 25)
+    poses = random_poses(400, 1.6, seed=7)
+    fast = estimate_counts(hand, obj, poses)
+    assert (fast.sum(-1) > 0).mean() > 0.5
+    np.testing.assert_array_equal(fast, estimate_counts_numpy(hand, obj, poses))
+
+
 def test_counts_do_not_depend_on_the_thread_count(box_hand):
     obj = object_points([sphere(0.5)], 40)
-    poses = random_poses(200, 1.2, seed=5)
-    before = numba.get_num_threads()
-    try:
-        numba.set_num_threads(1)
-        single = estimate_counts(box_hand, obj, poses)
-    finally:
-        numba.set_num_threads(before)
-    np.testing.assert_array_equal(single, estimate_counts(box_hand, obj, poses))
+    # Enough poses for several threads; a few go on the calling thread alone.
+    poses = random_poses(600, 1.2, seed=5)
+    single = estimate_counts(box_hand, obj, poses, n_jobs=1)
+    np.testing.assert_array_equal(single, estimate_counts(box_hand, obj, poses, n_jobs=3))
+    with thread_limit(1):
+        np.testing.assert_array_equal(single, estimate_counts(box_hand, obj, poses))
+    np.testing.assert_array_equal(single[:5], estimate_counts(box_hand, obj, poses[:5]))
 
 
 def test_far_pose_gives_exactly_zero(box_hand):
@@ -231,6 +344,47 @@ def test_backend_volumes_cache_and_params():
         "grid": "floor",
     }
     assert backend.name == "voxel" and "VoxelBackend(hand_resolution=60" in repr(backend)
+
+
+def test_backends_share_grids_and_points_of_the_same_geometry():
+    grasp = ArrayGrasp(HAND_BOX, [box_arrays([-0.5, -0.3, -0.4], [0.5, 0.3, 0.4])])
+    first, second = VoxelBackend(hand_resolution=30), VoxelBackend(hand_resolution=30)
+    assert first.hand_grid(grasp) is second.hand_grid(grasp)
+    assert first.object_point_set(grasp) is second.object_point_set(grasp)
+    other = VoxelBackend(hand_resolution=31, object_resolution=20)
+    assert other.hand_grid(grasp) is not first.hand_grid(grasp)
+    assert other.object_point_set(grasp) is not first.object_point_set(grasp)
+    assert VoxelBackend(hand_resolution=31).object_point_set(grasp) is first.object_point_set(
+        grasp
+    )
+    moved = ArrayGrasp(HAND_BOX, [box_arrays([-0.4, -0.3, -0.4], [0.5, 0.3, 0.4])])
+    assert first.object_point_set(moved) is not first.object_point_set(grasp)
+
+
+def test_volumes_with_progress_reports_every_pose():
+    backend = VoxelBackend(hand_resolution=40, object_resolution=20)
+    grasp = ArrayGrasp(HAND_BOX, [box_arrays([-0.5, -0.3, -0.4], [0.5, 0.3, 0.4])])
+    poses = random_poses(9000, 1.0, seed=8).reshape(3000, 3, 4, 4)
+    done = []
+    volumes = backend.volumes_with_progress(grasp, poses, done.append)
+    assert volumes.shape == (3000, 3) and sum(done) == 9000 and len(done) == 2
+    np.testing.assert_array_equal(volumes, backend.volumes(grasp, poses))
+    np.testing.assert_array_equal(backend.volumes_with_progress(grasp, poses[:2]), volumes[:2])
+
+
+def test_hand_volume_is_computed_once_per_hand():
+    class CountingGrasp(ArrayGrasp):
+        unions = 0
+
+        @property
+        def canonical_hand_volume(self):
+            CountingGrasp.unions += 1
+            return 8.0
+
+    grasp = CountingGrasp([box_arrays([-1, -1, -1], [1, 1, 1.5])], HAND_BOX)
+    assert VoxelBackend().hand_volume(grasp) == 8.0
+    assert VoxelBackend(hand_resolution=20).hand_volume(CountingGrasp(grasp.links, [])) == 8.0
+    assert CountingGrasp.unions == 1
 
 
 def test_backend_surface_options():
@@ -298,7 +452,7 @@ def test_spray_bottle_with_published_samples(shared_data):
     hand_hi = hi + 5
     hand_lo[1], hand_hi[1] = lo[1] + (hi[1] - lo[1]) / 3, lo[1] + 2 * (hi[1] - lo[1]) / 3
     hand = box_arrays(hand_lo, hand_hi)
-    grasp = ArrayGrasp([hand], [(bottle.vertices, bottle.faces)], samples=samples, key="spray")
+    grasp = ArrayGrasp([hand], [(bottle.vertices, bottle.faces)], samples=samples)
     backend = VoxelBackend()
     obj = backend.object_point_set(grasp)
     assert obj.n_surface == len(samples) == 7295

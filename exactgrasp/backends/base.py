@@ -1,4 +1,6 @@
-"""The interface every intersection backend implements, and the rigid-pose check they share.
+"""The interface every intersection backend implements, and what backends share: the
+rigid-pose check, poses equal to rounding (`repeated_poses`) and the threads that
+``n_jobs=None`` means (`default_threads`, `thread_limit`).
 
 Imports `exactgrasp.errors`, `exactgrasp.geometry.se3` and the backends' parameter checks.
 """
@@ -6,6 +8,10 @@ Imports `exactgrasp.errors`, `exactgrasp.geometry.se3` and the backends' paramet
 from __future__ import annotations
 
 import abc
+import contextlib
+import os
+from collections.abc import Callable, Iterator
+from contextvars import ContextVar
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -101,6 +107,87 @@ def _label(name: str, index: tuple[int, ...]) -> str:
     return f"{name}[{', '.join(map(str, index))}]" if index else name
 
 
+#: Poses whose matrices differ by at most this many units in the last place of their largest
+#: entry are one pose (see `repeated_poses`).
+SAME_POSE_ULPS = 16
+#: `repeated_poses` first groups poses on a grid of this many steps per unit, far coarser than
+#: `SAME_POSE_ULPS` (a pair split by a grid line is merely computed twice).
+POSE_GRID = 2.0**36
+
+
+def repeated_poses(poses: np.ndarray) -> np.ndarray:
+    """For each pose, the index of the first pose equal to it to rounding.
+
+    Two poses are equal to rounding when no entry of their matrices differs by more than
+    `SAME_POSE_ULPS` units in the last place of the larger one's largest entry (about 4e-15
+    for a rotation and a translation of length up to 1). Moving the object's vertices with
+    either pose rounds them by more than the two poses differ, so their exact volumes differ by
+    no more than the rounding the kernel already makes. Such repeats are common: a rotation
+    by ``a`` about ``w`` is a rotation by ``-a`` about ``-w``, and the balanced preset's four
+    axes include both poles, so 1,080 of its 4,266 poses repeat another one to rounding.
+
+    Parameters
+    ----------
+    poses : numpy.ndarray, shape (n, 4, 4)
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,), int64
+        ``rep[i] <= i``; ``rep[i] == i`` for the first pose of each group.
+    """
+    n = len(poses)
+    rows = poses[:, :3, :].reshape(n, 12)
+    # Group on a grid far coarser than the tolerance, then keep only true neighbours.
+    _, first, inv = np.unique(
+        np.round(rows * POSE_GRID), axis=0, return_index=True, return_inverse=True
+    )
+    rep = first[inv.reshape(-1)]
+    scale = np.maximum(np.abs(rows).max(1), np.abs(rows[rep]).max(1))
+    tol = SAME_POSE_ULPS * np.spacing(np.maximum(scale, 1.0))
+    same = np.abs(rows - rows[rep]).max(1) <= tol
+    return np.where(same, rep, np.arange(n)).astype(np.int64)
+
+
+#: Threads ``n_jobs=None`` means in the current context (None: every core); `thread_limit`
+#: sets it.
+_THREADS: ContextVar[int | None] = ContextVar("exactgrasp_threads", default=None)
+
+
+def default_threads() -> int:
+    """Threads a backend given ``n_jobs=None`` runs: the `thread_limit` in force, else every
+    core (``os.cpu_count()``)."""
+    limit = _THREADS.get()
+    return limit if limit is not None else (os.cpu_count() or 1)
+
+
+@contextlib.contextmanager
+def thread_limit(threads: int | None) -> Iterator[None]:
+    """Within the block (this thread, this context), ``n_jobs=None`` means ``threads``.
+
+    A batch worker sets 1: one worker per core already fills the machine. None: every core.
+    """
+    token = _THREADS.set(None if threads is None else max(1, int(threads)))
+    try:
+        yield
+    finally:
+        _THREADS.reset(token)
+
+
+def resolve_jobs(n_jobs: int | None) -> int:
+    """Threads for an ``n_jobs`` option: None -> `default_threads`, -1 -> every core
+    (``os.cpu_count()``), else ``n_jobs``."""
+    if n_jobs is None:
+        return default_threads()
+    if n_jobs == -1:
+        return os.cpu_count() or 1
+    return int(n_jobs)
+
+
+#: Pieces a backend without a progress hook of its own computes the poses in when a caller
+#: follows its progress (`Backend.volumes_with_progress`).
+PROGRESS_PIECES = 20
+
+
 class Backend(abc.ABC):
     """An intersection-volume backend.
 
@@ -145,6 +232,49 @@ class Backend(abc.ABC):
         numpy.ndarray, shape poses.shape[:-2], float64
             Volume of hand ∩ moved object in canonical units (cubed canonical lengths).
         """
+
+    def volumes_with_progress(
+        self, grasp: Grasp, poses: np.ndarray, advance: Callable[[int], Any] | None = None
+    ) -> np.ndarray:
+        """`volumes`, calling ``advance(k)`` (in the calling thread) as ``k`` more poses are
+        done.
+
+        This default computes the poses in `PROGRESS_PIECES` pieces along the first axis when
+        ``advance`` is given, in one call otherwise; a backend that can report progress from
+        inside one call overrides it.
+
+        Parameters
+        ----------
+        grasp : Grasp
+        poses : numpy.ndarray, shape (n, ..., 4, 4)
+        advance : callable, optional
+            Called with the number of poses finished since the last call.
+
+        Returns
+        -------
+        numpy.ndarray, shape poses.shape[:-2], float64
+        """
+        if advance is None or poses.ndim < 3 or len(poses) <= 1:
+            out = self.volumes(grasp, poses)
+            if advance is not None:
+                advance(int(np.prod(poses.shape[:-2])))
+            return out
+        step = -(-len(poses) // PROGRESS_PIECES)
+        parts = []
+        for start in range(0, len(poses), step):
+            block = poses[start : start + step]
+            parts.append(np.asarray(self.volumes(grasp, block), dtype=np.float64))
+            advance(int(np.prod(block.shape[:-2])))
+        return np.concatenate(parts)
+
+    def hand_volume(self, grasp: Grasp) -> float:
+        """Volume of the grasp's hand (the union of its links), in cubed canonical units: the
+        denominator of a descriptor.
+
+        This default is `Grasp.canonical_hand_volume`; a backend that has already built the
+        union overrides it to spare a second one.
+        """
+        return grasp.canonical_hand_volume
 
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self.params.items())

@@ -20,8 +20,14 @@ VOXEL_CACHE_SIZE = 8
 
 #: Library of the exact backend's broad phase (``"coal"``, ``"fcl"`` or None).
 EXACT_BROADPHASE = "coal"
-#: Threads over poses of the exact backend.
-EXACT_N_JOBS = 1
+#: Threads over poses of the exact backend: None is every core (``os.cpu_count()``), or what a
+#: batch worker sets (`exactgrasp.backends.base.thread_limit`).
+EXACT_N_JOBS = None
+#: The exact backend builds its broad phase's BVHs (once) only for a call with at least (the
+#: triangles of both meshes) / this many poses the kernel's own test leaves open (not known to
+#: cross): culling one spares at most the kernel's time on it, about what building a BVH over
+#: this many triangles takes (see docs/performance.md).
+EXACT_CULL_TRIANGLES_PER_POSE = 256
 #: Edge crossings recorded per pose before the exact kernel falls back to a boolean.
 EXACT_CAPACITY = 400_000
 #: Grid cells of the exact backend along a mesh's largest extent (measured best on the Barrett

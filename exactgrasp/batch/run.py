@@ -8,7 +8,8 @@ A resume skips the parts already there. See ``docs/batch.md`` for the file layou
 choices made; the ``exactgrasp batch`` command is `exactgrasp.cli.batch`.
 
 May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.progress`, `exactgrasp.paths`,
-`exactgrasp.backends`, the other `exactgrasp.batch` modules; never `exactgrasp.cli`.
+`exactgrasp.backends`, `exactgrasp.diagnostics`, the other `exactgrasp.batch` modules; never
+`exactgrasp.cli`.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from exactgrasp.batch.store import (
     write_part,
 )
 from exactgrasp.batch.worker import default_workers, open_pool
+from exactgrasp.diagnostics import ignores_third_party_warnings
 from exactgrasp.errors import BatchError
 from exactgrasp.geometry.intake import UNITS
 from exactgrasp.paths.presets import as_sampler
@@ -136,6 +138,7 @@ def _run_params(manifest: Manifest, engine: Backend, sampler: PathSampler, **ext
     return json.loads(json.dumps(params))
 
 
+@ignores_third_party_warnings
 def run_batch(
     manifest: str | os.PathLike,
     out: str | os.PathLike,

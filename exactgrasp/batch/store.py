@@ -15,7 +15,8 @@ the bytes do not depend on the number of workers or on the order parts finish in
 but ``timings.jsonl`` is written through `atomic_target` (temporary name, fsync, rename).
 The manifest is read by `exactgrasp.batch.manifest`.
 
-May import: `exactgrasp.errors`, `exactgrasp.batch.manifest` (pyarrow only through `require`).
+May import: `exactgrasp.errors`, `exactgrasp.descriptor`, `exactgrasp.batch.manifest` (pyarrow
+only through `require`).
 """
 
 from __future__ import annotations
@@ -25,12 +26,14 @@ import json
 import os
 import uuid
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from exactgrasp.batch.manifest import ManifestRow
+from exactgrasp.descriptor import Descriptor
 from exactgrasp.errors import BatchError, require
 
 FORMAT = "exactgrasp.batch/1"
@@ -255,7 +258,38 @@ def consolidate(out: Path, n_parts: int, params: dict[str, Any]) -> tuple[int, i
     return done, failed
 
 
-def read_batch(out: str | os.PathLike) -> tuple[list[str], np.ndarray, list[dict]]:
+@dataclass(frozen=True)
+class BatchDescriptors:
+    """The descriptors of a finished batch run, as `read_batch` returns them.
+
+    Unpacks as ``ids, descriptors, metadata = read_batch(out)``; ``descriptors`` is what
+    `exactgrasp.pairwise_distances` and `exactgrasp.distance` take.
+
+    Attributes
+    ----------
+    ids : list of str, length n
+        The manifest ids of the rows with a descriptor, in manifest order.
+    descriptors : list of Descriptor, length n
+        One `exactgrasp.Descriptor` per id, its metadata included (values: views of ``values``).
+    metadata : list of dict, length n
+        Each descriptor's metadata (without the run-dependent ``seconds``).
+    values : numpy.ndarray, shape (n, n_paths, n_steps), float64
+        Every descriptor's values in one array: intersection volume / hand volume.
+    """
+
+    ids: list[str]
+    descriptors: list[Descriptor]
+    metadata: list[dict]
+    values: np.ndarray
+
+    def __iter__(self) -> Iterator:
+        return iter((self.ids, self.descriptors, self.metadata))
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+
+def read_batch(out: str | os.PathLike) -> BatchDescriptors:
     """Read ``descriptors.parquet`` of a finished run.
 
     Parameters
@@ -265,19 +299,30 @@ def read_batch(out: str | os.PathLike) -> tuple[list[str], np.ndarray, list[dict
 
     Returns
     -------
-    ids : list of str, length n
-    values : numpy.ndarray, shape (n, n_paths, n_steps), float64
-        Intersection volume / hand volume, as `exactgrasp.Descriptor.values`.
-    metadata : list of dict, length n
-        Each descriptor's metadata (without the run-dependent ``seconds``).
+    BatchDescriptors
+        Unpacks as ``ids, descriptors, metadata``: the ids (list of str, length n), one
+        `exactgrasp.Descriptor` per id (what `exactgrasp.pairwise_distances` takes), and each
+        descriptor's metadata; ``.values`` holds all values, shape (n, n_paths, n_steps).
+
+    Raises
+    ------
+    BatchError
+        ``out`` holds no ``descriptors.parquet`` (the run has not finished).
     """
     import pyarrow.parquet as pq
 
     path = Path(out)
     path = path / DESCRIPTORS_FILE if path.is_dir() else path
+    if not path.is_file():
+        raise BatchError(
+            f"{path}: no such file; pass the output folder of a finished batch run (its "
+            f"{DESCRIPTORS_FILE} is written when the run ends)."
+        )
     table = pq.read_table(path)
     params = json.loads(table.schema.metadata[b"exactgrasp.batch"])
     shape = (table.num_rows, params["n_paths"], params["n_steps"])
-    values = table.column("values").combine_chunks().flatten().to_numpy(zero_copy_only=False)
+    flat = table.column("values").combine_chunks().flatten().to_numpy(zero_copy_only=False)
+    values = np.asarray(flat, dtype=np.float64).reshape(shape)
     metadata = [json.loads(m) for m in table.column("metadata").to_pylist()]
-    return table.column("id").to_pylist(), values.reshape(shape), metadata
+    descriptors = [Descriptor(v, m) for v, m in zip(values, metadata, strict=True)]
+    return BatchDescriptors(table.column("id").to_pylist(), descriptors, metadata, values)

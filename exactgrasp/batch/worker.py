@@ -4,8 +4,8 @@
 executes on a worker process (`compute_rows`) or in this process (`open_pool`, the pools).
 
 May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.paths`, `exactgrasp.grasp`,
-`exactgrasp.backends`, `exactgrasp.descriptor`, `exactgrasp.batch.manifest` (distributed only
-through `require`).
+`exactgrasp.backends`, `exactgrasp.descriptor`, `exactgrasp.diagnostics`,
+`exactgrasp.batch.manifest` (distributed only through `require`).
 """
 
 from __future__ import annotations
@@ -23,9 +23,11 @@ from pathlib import Path
 from typing import Any
 
 from exactgrasp.backends import Backend
+from exactgrasp.backends.base import thread_limit
 from exactgrasp.backends.registry import shared_backend
 from exactgrasp.batch.manifest import ManifestRow
 from exactgrasp.descriptor import compute_descriptor
+from exactgrasp.diagnostics import ignores_third_party_warnings
 from exactgrasp.errors import BatchError, require
 from exactgrasp.grasp import Grasp
 from exactgrasp.paths.sampler import PathSampler
@@ -68,6 +70,7 @@ def _load_grasp(row: ManifestRow, base_dir: Path, overrides: dict) -> Grasp:
     return Grasp.from_dict(data, base_dir=base_dir, source=source, **overrides)
 
 
+@ignores_third_party_warnings
 def compute_rows(
     rows: list[ManifestRow],
     base_dir: str,
@@ -95,7 +98,8 @@ def compute_rows(
         The exactgrasp version and backend parameters of the run; rows fail when this worker's
         differ.
     single_thread : bool
-        Run numba kernels on one thread (a worker per core already fills the machine).
+        Run backends given ``n_jobs=None`` on one thread (a worker per
+        core already fills the machine); False leaves them every core.
 
     Returns
     -------
@@ -105,13 +109,6 @@ def compute_rows(
         ``worker``.
     """
     start, cpu_start = time.perf_counter(), time.process_time()
-    if single_thread:
-        try:
-            import numba
-
-            numba.set_num_threads(1)
-        except ImportError:
-            pass
     sampler = PathSampler.from_params(sampler_params)
     engine = _worker_backend(backend)
     mismatch = None
@@ -130,7 +127,8 @@ def compute_rows(
             if mismatch:
                 raise BatchError(mismatch)
             grasp = _load_grasp(row, Path(base_dir), overrides or {})
-            descriptor = compute_descriptor(grasp, sampler, engine, progress=False)
+            with thread_limit(1 if single_thread else None):
+                descriptor = compute_descriptor(grasp, sampler, engine, progress=False)
             # Timings differ run to run; the rest of the metadata is a function of the input.
             metadata = {k: v for k, v in descriptor.metadata.items() if k != "seconds"}
             result["values"] = descriptor.values.ravel()

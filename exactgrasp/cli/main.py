@@ -6,8 +6,8 @@ Adding a command is a new module plus one entry in `COMMANDS`, whose order is th
 ``exactgrasp --help``. Handlers raise `ExactGraspError` for bad input; `main` turns it into
 a message and exit status 2.
 
-May import: `exactgrasp.errors`, `exactgrasp.version` and the command modules of
-`exactgrasp.cli`.
+May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.diagnostics` (third-party
+warnings stop here) and the command modules of `exactgrasp.cli`.
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from exactgrasp.cli import (
     show,
     validate,
 )
+from exactgrasp.diagnostics import ignores_third_party_warnings
 from exactgrasp.errors import ExactGraspError
 from exactgrasp.version import __version__
 
@@ -49,6 +50,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@ignores_third_party_warnings
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``exactgrasp`` console script; returns the exit status."""
     parser = build_parser()

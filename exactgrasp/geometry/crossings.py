@@ -7,14 +7,14 @@ test whose orientation signs are certified by a static error bound (Shewchuk's, 
 only certain crossings are reported, and pairs sharing an edge are skipped; between shells an
 uncertain contact is reported too.
 
-Imports: numpy, numba and `exactgrasp.geometry.predicates` only.
+Imports: numpy, `exactgrasp.compiling` and `exactgrasp.geometry.predicates` only.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from exactgrasp.compiling import inner, kernel
 from exactgrasp.geometry.predicates import orient_bound, orient_det
 
 __all__ = ["CROSS", "NO", "UNSURE", "find_crossings"]
@@ -25,7 +25,7 @@ NO, CROSS, UNSURE = 0, 1, 2
 # -- numba kernels ----------------------------------------------------------------------------
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def _sign(det, bound):
     if det > bound:
         return 1
@@ -34,7 +34,7 @@ def _sign(det, bound):
     return 0
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def _edge_tri(X, e0, e1, a, b, c, bound):
     """Does the closed segment from corner ``e0`` to ``e1`` meet the closed triangle of
     corners ``a, b, c``? Corners are rows of X (6, 3): scalar loads, no array views in the
@@ -64,7 +64,7 @@ def _edge_tri(X, e0, e1, a, b, c, bound):
     return CROSS, dp / (dp - dq)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def _tri_tri(V, F, t, u, skip_shared, X, out):
     """Do triangles t and u of (V, F) meet? `NO`, `CROSS` (a certain crossing, its point
     written to ``out`` (3,)) or `UNSURE`. With ``skip_shared`` (triangles of one shell
@@ -125,7 +125,7 @@ def _tri_tri(V, F, t, u, skip_shared, X, out):
     return result
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def _fill_cells(i0, i1, n, offsets, keys, tris):
     """Write the (flat cell, triangle) entries of every triangle's bounding-box cell range."""
     for f in range(i0.shape[0]):
@@ -138,7 +138,7 @@ def _fill_cells(i0, i1, n, offsets, keys, tris):
                     q += 1
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def _pair_scan(V, F, shell, lo, hi, i0, n, keys, tris):
     """Test every pair of triangles sharing a grid cell, once (in the first cell they share).
 
@@ -160,7 +160,6 @@ def _pair_scan(V, F, shell, lo, hi, i0, n, keys, tris):
         cell = keys[start]
         # Sweep along x: sorted by lower x, a cell's later triangles start past t's end.
         run = tris[start:end]
-        run = run[np.argsort(lo[run, 0], kind="mergesort")]
         for p in range(run.shape[0]):
             t = run[p]
             for q in range(p + 1, run.shape[0]):
@@ -247,6 +246,7 @@ def find_crossings(
     keys = np.empty(offsets[-1], np.int64)
     tris = np.empty(offsets[-1], np.int64)
     _fill_cells(i0, i1, n, offsets, keys, tris)
-    order = np.argsort(keys, kind="stable")
+    # By cell, then lower x (the sweep's order), then triangle: sorted here, not in the kernel.
+    order = np.lexsort((tris, lo[tris, 0], keys))
     label = np.ascontiguousarray(label, dtype=np.int64)
     return _pair_scan(V, F, label, lo, hi, i0, n, keys[order], tris[order])

@@ -103,8 +103,11 @@ def union_volume(parts: Sequence[MeshArrays], name: str = "hand") -> float:
 
 
 def mesh_arrays(solid: manifold3d.Manifold) -> MeshArrays:
-    """Vertices (n, 3) float64 and faces (m, 3) int64 of a manifold3d solid, C-contiguous."""
+    """Vertices (n, 3) float64 and faces (m, 3) int64 of a manifold3d solid, C-contiguous.
+
+    Fresh writable copies: manifold3d's buffers are read-only, and the kernels would be
+    compiled a second time for read-only arrays."""
     mesh = solid.to_mesh64()
-    V = np.ascontiguousarray(np.asarray(mesh.vert_properties)[:, :3], dtype=np.float64)
-    F = np.ascontiguousarray(np.asarray(mesh.tri_verts), dtype=np.int64)
+    V = np.array(np.asarray(mesh.vert_properties)[:, :3], dtype=np.float64, order="C")
+    F = np.array(np.asarray(mesh.tri_verts), dtype=np.int64, order="C")
     return V, F

@@ -2,12 +2,12 @@
 
 `orient` is the determinant of Shewchuk's orientation test evaluated in one fixed order, with
 the static error bound `orient_bound`: a sign whose magnitude exceeds the bound is certain.
-Imports only numba.
+Imports numba and `exactgrasp.compiling` only.
 """
 
 from __future__ import annotations
 
-from numba import njit
+from exactgrasp.compiling import inner, kernel
 
 # Shewchuk's bound on the rounding error of this evaluation order of the determinant is
 # (7 + 56 eps) eps ~ 7.8e-16 times its permanent, and the permanent is at most 6 L^3 when every
@@ -15,17 +15,17 @@ from numba import njit
 ORIENT_ERR = 1e-14
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def orient_bound(extent):
     """Error bound of `orient` for points whose coordinates span at most `extent`."""
     return ORIENT_ERR * extent * extent * extent
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def orient_det(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
     """Six times the signed volume of tetrahedron abcd (sign > 0: d below abc's plane).
 
-    `orient` evaluates it too; inlined at numba's IR level into its callers.
+    `orient` evaluates it too.
     """
     adx = ax - dx
     ady = ay - dy
@@ -41,7 +41,7 @@ def orient_det(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
     return det
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def orient(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
     """Six times the signed volume of tetrahedron abcd, and whether its sign is certain.
 

@@ -4,19 +4,19 @@
 The point routine sums the solid angles of the triangles (van Oosterom and Strackee), O(faces)
 per point; the lattice routine sweeps columns of nodes and gives exact integer winding numbers
 of all nodes at once, O(crossings), with a symbolic perturbation on shared edges. Callers round
-as they need (``round(w) & 1``, ``abs(w) > 0.5``). Imports only numpy and numba.
+as they need (``round(w) & 1``, ``abs(w) > 0.5``). Imports numpy and `exactgrasp.compiling` only.
 """
 
 from __future__ import annotations
 
-import numba
 import numpy as np
-from numba import njit
+
+from exactgrasp.compiling import inner, kernel
 
 __all__ = ["winding_inside_lattice", "winding_number"]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def winding_number(x, V, F):
     """Generalised winding number of point x with respect to a closed mesh (not rounded)."""
     total = 0.0
@@ -35,7 +35,7 @@ def winding_number(x, V, F):
     return total / (4.0 * np.pi)
 
 
-@numba.njit(cache=True)
+@inner()
 def _edge_side(px, py, ax, ay, bx, by):
     """Side (+1 left, -1 right) of point p for the directed edge a->b, never 0 for a != b.
 
@@ -61,7 +61,7 @@ def _edge_side(px, py, ax, ay, bx, by):
     return 0
 
 
-@numba.njit(cache=True)
+@inner()
 def _edge_value(px, py, ax, ay, bx, by):
     """Twice the signed area of (a, b, p), in the same fixed vertex order as `_edge_side`."""
     if ax > bx or (ax == bx and ay > by):
@@ -69,7 +69,7 @@ def _edge_value(px, py, ax, ay, bx, by):
     return (bx - ax) * (py - ay) - (by - ay) * (px - ax)
 
 
-@numba.njit(cache=True)
+@inner()
 def _column_crossings(triangles, nx, ny, count_only, starts, fill, heights, signs):
     """Visit every (column, triangle) crossing; count them or write height and sign."""
     for t in range(triangles.shape[0]):
@@ -108,7 +108,7 @@ def _column_crossings(triangles, nx, ny, count_only, starts, fill, heights, sign
                 signs[slot] = s_ab
 
 
-@numba.njit(cache=True)
+@kernel()
 def winding_inside_lattice(triangles, nx, ny, nz):
     """Nodes (in index coordinates) whose winding number is at least 1, as uint8."""
     starts = np.zeros(nx * ny + 1, np.int64)

@@ -2,8 +2,9 @@
 the paper's noise tests with both backends (``exactgrasp validate``,
 ``python -m exactgrasp.report``, ``docs/validation.md``).
 
+    from exactgrasp.datapath import data_dir
     from exactgrasp.report import ValidationConfig, run_validation
-    run_validation("../shared/data", "report", ValidationConfig.quick())
+    run_validation(data_dir(), "report", ValidationConfig.quick())
 
 `run_validation` loads on first use: it pulls in the figures (matplotlib), which the
 ``exactgrasp`` command should not pay for when it only builds its parser (`report.args`).

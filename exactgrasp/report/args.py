@@ -4,8 +4,8 @@
 Light on purpose (the ``exactgrasp`` command imports it to build its parser): the report
 itself, and matplotlib with it, loads only when `run_from_args` runs a report.
 
-May import: `exactgrasp.report.config`, `exactgrasp.report.data` (and `exactgrasp.report.run`
-inside `run_from_args`); never `exactgrasp.cli`.
+May import: `exactgrasp.datapath`, `exactgrasp.report.config`, `exactgrasp.report.data` (and
+`exactgrasp.report.run` inside `run_from_args`); never `exactgrasp.cli`.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import argparse
 import shlex
 import sys
 
+from exactgrasp.datapath import ENV_VAR, data_dir
 from exactgrasp.errors import DataError
 from exactgrasp.report.config import ValidationConfig
 from exactgrasp.report.data import barrett_dir
@@ -33,7 +34,10 @@ DESCRIPTION = (
 def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """Add the report's options to ``parser``; returns it."""
     parser.add_argument(
-        "--data", required=True, help="shared data folder (holds barrett-grasps/, osu-objects/)"
+        "--data",
+        default=None,
+        help=f"shared data folder (holds barrett-grasps/, osu-objects/); default: ${ENV_VAR} "
+        "when set, else ../shared/data beside the checkout",
     )
     parser.add_argument("--out", required=True, help="folder for the report")
     parser.add_argument(
@@ -117,8 +121,9 @@ def run_from_args(args: argparse.Namespace, prog: str = "exactgrasp validate") -
     # Loads the figures (matplotlib) only when a report is actually run.
     from exactgrasp.report.run import run_validation
 
+    data = data_dir() if args.data is None else args.data
     try:
-        barrett_dir(args.data)
+        barrett_dir(data)
     except DataError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
@@ -126,6 +131,6 @@ def run_from_args(args: argparse.Namespace, prog: str = "exactgrasp validate") -
     config = ValidationConfig.named(size, **overrides(args))
     log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
     run_validation(
-        args.data, args.out, config, cache_dir=args.cache, command=_command_line(prog), log=log
+        data, args.out, config, cache_dir=args.cache, command=_command_line(prog), log=log
     )
     return 0

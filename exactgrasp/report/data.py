@@ -79,7 +79,8 @@ def barrett_dir(data_dir: str | Path) -> Path:
     if not data_dir.is_dir():
         raise DataError(
             f"data folder {str(data_dir)!r} does not exist; pass the shared data folder that "
-            "holds barrett-grasps/ and osu-objects/, e.g. --data ../shared/data."
+            "holds barrett-grasps/ and osu-objects/, e.g. --data ../shared/data (or set "
+            "EXACTGRASP_DATA)."
         )
     missing = [
         sub

@@ -7,9 +7,10 @@ default resolution, the built-in hand's shape), then review and commit the chang
     python tests/goldens/regenerate.py --backend voxel  # one backend
     python tests/goldens/regenerate.py --case builtin_box
 
-Cases on the real Barrett data are written only when ``../shared/data`` is there (beside the
-repository, as ``tests/conftest.py`` expects). Each golden is ``<case>.<backend>.npz`` in this
-folder, written by `exactgrasp.Descriptor.save` without the run-dependent ``seconds``.
+Cases on the real Barrett data are written only when the shared data folder is there
+(``$EXACTGRASP_DATA``, else ``../shared/data`` beside the repository, as ``tests/conftest.py``).
+Each golden is ``<case>.<backend>.npz`` in this folder, written by `exactgrasp.Descriptor.save`
+without the run-dependent ``seconds``.
 """
 
 from __future__ import annotations
@@ -22,10 +23,11 @@ from pathlib import Path
 import numpy as np
 
 import exactgrasp as eg
+from exactgrasp.datapath import data_dir
 
 GOLDEN_DIR = Path(__file__).resolve().parent
-#: ``../shared/data`` beside the repository (the same place ``tests/conftest.py`` looks).
-SHARED_DATA = GOLDEN_DIR.parents[1].parent / "shared" / "data"
+#: ``$EXACTGRASP_DATA``, else ``../shared/data`` beside the repository (as ``tests/conftest.py``).
+SHARED_DATA = data_dir()
 #: Small on purpose: 3 directions x 2 axes x 2 amounts -> 19 paths, 3 steps each.
 SAMPLER_PARAMS = {"n_translations": 3, "n_axes": 2, "n_amounts": 2, "n_steps": 3}
 #: Backends with their default parameters, so that a changed default shows up here.

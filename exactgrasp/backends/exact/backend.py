@@ -7,6 +7,7 @@ Imports `backends.base`, `backends.defaults`, `cache`, `errors` and `intersector
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -31,8 +32,11 @@ class ExactBackend(Backend):
     broadphase : {"coal", "fcl", None}
         Library that skips whole poses whose surfaces are apart; None tests every pose in
         full. The volumes do not depend on it.
-    n_jobs : int
-        Threads over poses (-1: all cores). The volumes do not depend on it.
+    n_jobs : int or None
+        Threads over poses. None (default): every core (``os.cpu_count()``), except inside a
+        batch worker, which sets the number (one per worker process: the batch already runs a
+        worker per core; `exactgrasp.backends.base.thread_limit`). -1: every core, always.
+        The volumes do not depend on it.
     **tuning
         Passed to `ExactIntersector` (``hand_cell``, ``object_cell``, ``capacity``).
 
@@ -48,7 +52,7 @@ class ExactBackend(Backend):
     def __init__(
         self,
         broadphase: str | None = defaults.EXACT_BROADPHASE,
-        n_jobs: int = defaults.EXACT_N_JOBS,
+        n_jobs: int | None = defaults.EXACT_N_JOBS,
         **tuning: Any,
     ):
         tuning = check_options(broadphase, n_jobs, tuning, type(self).__name__)
@@ -57,7 +61,7 @@ class ExactBackend(Backend):
         elif broadphase == "fcl":
             require("fcl", "the exact backend's fcl broad phase", "python-fcl", "exact")
         self.broadphase = broadphase
-        self.n_jobs = int(n_jobs)
+        self.n_jobs = None if n_jobs is None else int(n_jobs)
         self.tuning = dict(tuning)
         self._cache = LRUCache(self.cache_size)
 
@@ -82,3 +86,15 @@ class ExactBackend(Backend):
     def volumes(self, grasp: Grasp, poses: np.ndarray) -> np.ndarray:
         """Exact volume of hand ∩ moved object per pose, in cubed canonical units."""
         return self.intersector(grasp).volumes(check_poses(poses))
+
+    def volumes_with_progress(
+        self, grasp: Grasp, poses: np.ndarray, advance: Callable[[int], Any] | None = None
+    ) -> np.ndarray:
+        """`volumes` in one call, ``advance(k)`` called as pieces of the intersector's own
+        work end (`ExactIntersector.volumes`)."""
+        return self.intersector(grasp).volumes(check_poses(poses), progress=advance)
+
+    def hand_volume(self, grasp: Grasp) -> float:
+        """The volume of the union of the hand's links the intersector built, in cubed
+        canonical units (equal to `Grasp.canonical_hand_volume` to manifold3d's rounding)."""
+        return self.intersector(grasp).hand_volume

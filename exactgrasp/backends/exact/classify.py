@@ -86,15 +86,14 @@ def object_statuses(S, V, grid):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def hand_statuses(S, V, R, t, grid, reps, cellmark, whole, uniform):
+def hand_statuses(S, V, R, t, grid, reps, crossed, whole, uniform):
     """`object_statuses` of the hand's vertices in the object's grid, part by part (``reps``,
     `tables.HandTables.parts`), the vertices moved by ``x -> R^T (x - t)``.
 
-    A part whose cell no object face reached (``cellmark`` False; with ``whole``) holds no
-    point of the object's surface: the convex region it bounds (cell ∩ its faces' box ∩
-    their slab, see `search.object_faces`) is wholly inside or wholly outside, so the first vertex
-    found in a cell of known status gives every vertex's status (``uniform[k]`` True).
-    Other parts get a status per vertex (-1 where unknown)."""
+    A part none of whose own edges is crossed (``crossed[k]`` False; with ``whole``) has one
+    status: its vertices are joined by those edges (`grids.part_order`). So the first vertex
+    found in a cell of known status gives every vertex's status (``uniform[k]`` True). Other
+    parts get a status per vertex (-1 where unknown)."""
     lo, ih, n, status = grid.corner, 1.0 / grid.cell, grid.shape, grid.status
     l0, l1, l2, n0, n1, n2 = lo[0], lo[1], lo[2], n[0], n[1], n[2]
     r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
@@ -102,7 +101,7 @@ def hand_statuses(S, V, R, t, grid, reps, cellmark, whole, uniform):
     r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
     t0, t1, t2 = t[0], t[1], t[2]
     for k in range(reps.shape[0] - 1):
-        each = not (whole and not cellmark[reps[k, 0]])
+        each = not (whole and not crossed[k])
         st = -1
         for i in range(reps[k, 1], reps[k + 1, 1]):
             d0, d1, d2 = V[i, 0] - t0, V[i, 1] - t1, V[i, 2] - t2
@@ -244,12 +243,12 @@ def classify_vertices(
     R, t, hand_mesh, hand, object_mesh, obj, hand_grid, object_grid, scratch, code, token
 ):  # fmt: skip
     """Stage "classify" of a pose (``docs/exact-backend.md``, "Method", steps 1, 4 and 5):
-    every vertex's status against the other mesh, after the search (`search.object_faces`) has
-    recorded the crossings and marked the hand cells it reached.
+    every vertex's status against the other mesh, after the search (`search.trace_pairs`) has
+    recorded the crossings.
 
     Object vertices (moved: ``scratch.object_V``) get their status in the hand's grid, hand
-    vertices theirs in the object's grid (moved by ``x -> R^T (x - t)``), parts whose cell no
-    object face reached as a whole; then unknown vertices take a neighbour's status across an
+    vertices theirs in the object's grid (moved by ``x -> R^T (x - t)``), parts none of whose
+    own edges is crossed as a whole; then unknown vertices take a neighbour's status across an
     edge, flipped by the edge's crossings, and a shell with none known gets `ray_status`.
     With ``code`` other than `OK` (the search stopped), only the statuses from the grids are
     set. ``token`` is the last stamp the point tests used. Returns (code, token): `DEGENERATE`
@@ -262,8 +261,12 @@ def classify_vertices(
     acnt, bcnt = scratch.work.hand_count, scratch.work.object_count
     cell_rep = hand.parts
     object_statuses(BS, BV, hand_grid)
-    reached = scratch.work.cell_reached
-    hand_statuses(AS, AV, R, t, object_grid, cell_rep, reached, code == OK, uniform)
+    crossed, epart, arec = scratch.work.part_crossed, hand.edge_part, scratch.work.hand_rec
+    for k in range(scratch.work.nrec[0]):
+        if epart[arec.edge[k]] >= 0:
+            crossed[epart[arec.edge[k]]] = True
+    hand_statuses(AS, AV, R, t, object_grid, cell_rep, crossed, code == OK, uniform)
+    crossed[:] = False
     if code == OK:
         u = resolve(
             AS, hand_mesh.adj_start, hand_mesh.adj_vertex, hand_mesh.adj_edge, acnt, queue,

@@ -2,8 +2,8 @@
 the kernel (every shell of both meshes outside the other, their surfaces apart).
 
 See "Culling rules" in ``docs/exact-backend.md``: culling never changes a bit of a result. The
-BVH queries are `geometry.bvh.MeshPair`'s. Imports numpy, scipy, `classify`, `tables` and
-`geometry.winding`.
+BVH queries are `geometry.bvh.MeshPair`'s, built only where `worth_building` says so.
+Imports numpy, scipy, `backends.defaults`, `classify`, `tables` and `geometry.winding`.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from exactgrasp.backends import defaults
 from exactgrasp.backends.exact.classify import surfaces_cross
 from exactgrasp.backends.exact.tables import CellGrid, MeshTables
 from exactgrasp.geometry.winding import winding_number
@@ -62,6 +63,30 @@ def shells_outside(
     return True
 
 
+def crossing_poses(
+    poses: np.ndarray,
+    hand_mesh: MeshTables,
+    hand_grid: CellGrid,
+    object_mesh: MeshTables,
+    object_grid: CellGrid,
+    shells: tuple[tuple[np.ndarray, int], tuple[np.ndarray, int]],
+) -> np.ndarray:
+    """Which poses (k, 4, 4; local coordinates) certainly have crossing surfaces (the kernel's
+    cheap test, `classify.surfaces_cross`): the broad phase is never asked about them. Returns
+    a bool mask (k,)."""
+    return surfaces_cross(
+        poses, hand_mesh.vertices, *shells[0], hand_grid, object_mesh.vertices, *shells[1],
+        object_grid,
+    )  # fmt: skip
+
+
+def worth_building(open_poses: int, triangles: int) -> bool:
+    """Whether BVHs over ``triangles`` triangles (both meshes) are worth building for
+    ``open_poses`` poses that `crossing_poses` leaves open: at least one such pose, and at
+    least ``triangles / defaults.EXACT_CULL_TRIANGLES_PER_POSE`` of them."""
+    return open_poses > 0 and open_poses * defaults.EXACT_CULL_TRIANGLES_PER_POSE >= triangles
+
+
 def culled_poses(
     poses: np.ndarray,
     cull: Any,
@@ -70,6 +95,7 @@ def culled_poses(
     object_mesh: MeshTables,
     object_grid: CellGrid,
     shells: tuple[tuple[np.ndarray, int], tuple[np.ndarray, int]],
+    crossing: np.ndarray | None = None,
 ) -> np.ndarray:
     """Which poses (k, 4, 4; local coordinates) have volume exactly 0 for certain.
 
@@ -77,14 +103,16 @@ def culled_poses(
     farther apart than its gap and every shell of each mesh (``shells``: hand's, object's, as
     from `shell_labels`) lies outside the other (`shells_outside`). Surfaces apart, each shell
     lies wholly inside or wholly outside the other mesh, so one vertex of known status decides
-    it; a shell with none gets a winding number. Returns a bool mask (k,).
+    it; a shell with none gets a winding number. ``crossing`` is `crossing_poses` of the poses
+    when the caller has it. Returns a bool mask (k,).
     """
     out = np.zeros(len(poses), bool)
     AV, AF = hand_mesh.vertices, hand_mesh.faces
     BV, BF = object_mesh.vertices, object_mesh.faces
     # The BVH query costs more than the kernel where the surfaces plainly cross; ask it only
     # about the other poses.
-    crossing = surfaces_cross(poses, AV, *shells[0], hand_grid, BV, *shells[1], object_grid)
+    if crossing is None:
+        crossing = crossing_poses(poses, hand_mesh, hand_grid, object_mesh, object_grid, shells)
     # Only poses whose volume is exactly 0 are culled: a shell inside the other mesh is left to
     # the kernel, so culling cannot change a single bit of any result.
     for i in np.flatnonzero(~crossing):

@@ -11,7 +11,7 @@ import numpy as np
 
 from exactgrasp.backends.exact.cells import raster_triangles
 from exactgrasp.backends.exact.tables import CellGrid
-from exactgrasp.backends.exact.tolerances import GRID_MARGIN, NORMAL_FLOOR
+from exactgrasp.backends.exact.tolerances import GRID_MARGIN, LENGTH_FLOOR, NORMAL_FLOOR
 from exactgrasp.geometry.winding import winding_number
 
 
@@ -32,13 +32,30 @@ def vertex_cells(V: np.ndarray, cell: float) -> np.ndarray:
     return (ijk[:, 0] * n[1] + ijk[:, 1]) * n[2] + ijk[:, 2]
 
 
+def morton_order(X: np.ndarray) -> np.ndarray:
+    """An order of points X (k, 3) along a Morton (Z-order) curve over their bounds, 10 bits per
+    axis: consecutive points are mostly close together. Shape (k,), int64."""
+    if len(X) == 0:
+        return np.zeros(0, np.int64)
+    lo, hi = X.min(0), X.max(0)
+    q = np.floor((X - lo) / np.maximum(hi - lo, LENGTH_FLOOR) * 1023).astype(np.int64)
+    code = np.zeros(len(X), np.int64)
+    for bit in range(10):
+        for ax in range(3):
+            code |= ((q[:, ax] >> bit) & 1) << (3 * bit + ax)
+    return np.argsort(code, kind="stable").astype(np.int64)
+
+
 def cell_order(V: np.ndarray, F: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
     """The same mesh with its vertices renumbered in the order of their `build_grid` cells
-    (stable), so that each cell's vertices are consecutive: (V (n, 3), F (m, 3))."""
+    (stable), so that each cell's vertices are consecutive, and its faces in the order of their
+    centres along a Morton curve, so that faces close together have close indices (the
+    kernels' reads of per-face tables then hit the same cache lines): (V (n, 3), F (m, 3))."""
     order = np.argsort(vertex_cells(V, cell), kind="stable")
     rank = np.empty(len(V), np.int64)
     rank[order] = np.arange(len(V))
-    return np.ascontiguousarray(V[order]), np.ascontiguousarray(rank[F])
+    F = rank[F][morton_order(V[F].mean(1))]
+    return np.ascontiguousarray(V[order]), np.ascontiguousarray(F)
 
 
 def build_grid(V: np.ndarray, F: np.ndarray, cell: float) -> CellGrid:
@@ -96,34 +113,61 @@ def build_grid(V: np.ndarray, F: np.ndarray, cell: float) -> CellGrid:
     # Summed-volume table of the surface cells: how many a box of cells holds, in 8 reads.
     table = np.zeros(tuple(n + 1), np.int64)
     table[1:, 1:, 1:] = surface.reshape(tuple(n)).cumsum(0).cumsum(1).cumsum(2)
-    return CellGrid(lo, float(cell), n, status, cell_start, tris, table.reshape(-1))
-
-
-def cell_reps(V: np.ndarray, cell: float) -> np.ndarray:
-    """The hand grid cells holding a vertex (the "parts") and the first vertex in each, for
-    vertices numbered cell by cell (`cell_order`): `tables.HandTables.parts`, shape
-    (parts + 1, 2)."""
-    cells, first = np.unique(vertex_cells(V, cell), return_index=True)
-    if np.any(np.diff(first) <= 0):
-        raise AssertionError("hand vertices are not numbered cell by cell")
-    return np.ascontiguousarray(
-        np.stack([np.append(cells, -1), np.append(first, len(V))], axis=1).astype(np.int64)
+    grid = CellGrid(
+        lo, float(cell), n, status, cell_start, tris, table.reshape(-1),
+        np.empty((0, 6), np.float32), np.empty((0, 11)),
+    )  # fmt: skip
+    T = V[F]
+    N = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    boxes = np.hstack([T.min(1), T.max(1)])
+    return grid._replace(
+        boxes=outward_f32(cell_boxes(grid, boxes)), bounds=cell_patches(grid, V, F, N, boxes)
     )
 
 
-def next_listed(grid: CellGrid) -> np.ndarray:
-    """Per axis d and grid cell: the index along d of the first cell at or after it, in its
-    line of cells along d, that lists any face (the line's length if none); shape (3, cells)."""
-    n, cs = grid.shape, grid.cell_start
-    listed = (cs[1:] > cs[:-1]).reshape(tuple(n))
-    out = np.empty((3, listed.size), np.int64)
-    for d in range(3):
-        shape = [1, 1, 1]
-        shape[d] = n[d]
-        index = np.where(listed, np.arange(n[d]).reshape(shape), n[d])
-        first = np.flip(np.minimum.accumulate(np.flip(index, d), axis=d), d)
-        out[d] = first.reshape(-1)
-    return out
+def outward_f32(boxes: np.ndarray) -> np.ndarray:
+    """Boxes (k, 6: min xyz, max xyz) in single precision, each bound rounded outwards, so that
+    every box still holds the one it came from."""
+    out = boxes.astype(np.float32)
+    low, high = out[:, :3], out[:, 3:]
+    low[low > boxes[:, :3]] = np.nextafter(low, np.float32(-np.inf))[low > boxes[:, :3]]
+    high[high < boxes[:, 3:]] = np.nextafter(high, np.float32(np.inf))[high < boxes[:, 3:]]
+    return np.ascontiguousarray(out)
+
+
+def part_order(V: np.ndarray, F: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """The hand's parts: in each `build_grid` cell, the pieces of surface its vertices form
+    when joined by the edges with both ends in that cell.
+
+    Returns (order (n,), part (n,)): the vertices renumbered so that each part's vertices are
+    consecutive, parts in the order of their cells (`cell_order` keeps its cell by cell
+    order), and each renumbered vertex's part. A part is connected through its own edges, so
+    that where none of them is crossed, all its vertices share one status."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    cells = vertex_cells(V, cell)
+    u = F.reshape(-1)
+    v = F[:, [1, 2, 0]].reshape(-1)
+    same = cells[u] == cells[v]
+    graph = coo_matrix((np.ones(same.sum()), (u[same], v[same])), shape=(len(V), len(V)))
+    _, label = connected_components(graph, directed=False)
+    order = np.lexsort((np.arange(len(V)), label, cells))
+    key = cells[order] * (len(V) + 1) + label[order]
+    part = np.concatenate([[0], np.cumsum(key[1:] != key[:-1])]).astype(np.int64)
+    return order.astype(np.int64), part
+
+
+def cell_reps(V: np.ndarray, cell: float, part: np.ndarray) -> np.ndarray:
+    """The hand's parts (`part_order`; ``part`` (n,) each vertex's, nondecreasing), their
+    cells and first vertices: `tables.HandTables.parts`, shape (parts + 1, 2)."""
+    first = np.flatnonzero(np.diff(part, prepend=-1))
+    cells = vertex_cells(V, cell)
+    if np.any(np.diff(cells) < 0) or len(first) != part[-1] + 1:
+        raise AssertionError("hand vertices are not numbered part by part")
+    return np.ascontiguousarray(
+        np.stack([np.append(cells[first], -1), np.append(first, len(V))], axis=1).astype(np.int64)
+    )
 
 
 def cell_corners(grid: CellGrid) -> np.ndarray:
@@ -141,7 +185,8 @@ def clip_to_cells(boxes: np.ndarray, corner: np.ndarray, h: float) -> None:
 
 def cell_boxes(grid: CellGrid, ABB: np.ndarray) -> np.ndarray:
     """The faces' bounding boxes ``ABB`` (m, 6) in the order of the grid's cell lists, each
-    clipped to its cell grown by `GRID_MARGIN`: `tables.HandTables.cell_boxes`."""
+    clipped to its cell grown by `GRID_MARGIN`: `tables.CellGrid.boxes` (only the grid's frame
+    and lists are read)."""
     cs, ct = grid.cell_start, grid.cell_faces
     out = np.ascontiguousarray(ABB[ct])
     clip_to_cells(out, np.repeat(cell_corners(grid), np.diff(cs), axis=0), grid.cell)
@@ -149,9 +194,9 @@ def cell_boxes(grid: CellGrid, ABB: np.ndarray) -> np.ndarray:
 
 
 def cell_patches(grid: CellGrid, AV, AF, AN, ABB) -> np.ndarray:
-    """Per grid cell, bounds of the faces it lists: `tables.HandTables.cell_bounds`, shape
-    (cells, 11), from the mesh (AV, AF), its normals AN and face boxes ABB; see
-    `search.object_faces`."""
+    """Per grid cell, bounds of the faces it lists: `tables.CellGrid.bounds`, shape (cells, 11),
+    from the mesh (AV, AF), its normals AN and face boxes ABB (only the grid's frame and lists
+    are read)."""
     h, cs, ct = grid.cell, grid.cell_start, grid.cell_faces
     ncell = len(cs) - 1
     cell = np.repeat(np.arange(ncell), np.diff(cs))

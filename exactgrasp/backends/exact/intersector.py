@@ -20,16 +20,22 @@ package's modules below `backend`.
 
 from __future__ import annotations
 
-import os
+import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from typing import Any
 
 import numpy as np
 
 from exactgrasp.backends import defaults
-from exactgrasp.backends.base import check_poses
-from exactgrasp.backends.exact.culling import culled_poses, shell_labels
+from exactgrasp.backends.base import check_poses, repeated_poses, resolve_jobs
+from exactgrasp.backends.exact.culling import (
+    crossing_poses,
+    culled_poses,
+    shell_labels,
+    worth_building,
+)
 from exactgrasp.backends.exact.grids import build_grid, cell_order
 from exactgrasp.backends.exact.options import check_options
 from exactgrasp.backends.exact.pose import pose_volumes
@@ -55,7 +61,7 @@ from exactgrasp.backends.exact.tolerances import (
     TINY_FACE,
 )
 from exactgrasp.errors import BackendError
-from exactgrasp.geometry.bvh import MeshPair
+from exactgrasp.geometry.bvh import MeshPair, require_engine
 from exactgrasp.geometry.manifold import mesh_arrays, union_solids
 
 #: Largest grid a cell option may ask for (cells per grid): about 1.6 GB of tables.
@@ -63,6 +69,12 @@ MAX_GRID_CELLS = 200_000_000
 #: What `ExactIntersector.pose_sources` says, indexed by the kernel's result code.
 POSE_SOURCES = np.empty(4, dtype="<U7")
 POSE_SOURCES[[OK, CULLED, DEGENERATE, OVERFLOW]] = ("kernel", "culled", "boolean", "boolean")
+#: Pieces per thread the distinct poses of a call are dealt into (interleaved, taken by
+#: whichever thread is free): they balance threads that run at different speeds and pace
+#: the progress callback, at the price of one kernel call each.
+PIECES_PER_THREAD = 8
+#: Fewest poses in a piece (a kernel call has a fixed cost of its own).
+PIECE_POSES = 32
 
 
 def grid_cell(vertices: np.ndarray, cell: float | None, key: str) -> float:
@@ -107,9 +119,10 @@ class ExactIntersector:
     broadphase : {"coal", "fcl", None}
         Library used to skip whole poses whose surfaces are apart (volume from a point test,
         no surface work). None tests every pose in full. Results do not depend on it.
-    n_jobs : int
-        Threads over poses (the kernels release the GIL); -1 uses every core. Results do not
-        depend on it.
+    n_jobs : int or None
+        Threads over poses (the kernels release the GIL): None (default) every core, or what
+        `backends.base.thread_limit` sets where a batch worker runs (read at each `volumes`
+        call); -1 every core. Results do not depend on it.
     **tuning
         ``hand_cell`` / ``object_cell`` (grid cell edge, same units as the meshes; default
         1/48 of the mesh's largest extent, about 0.1 canonical units for the Barrett hand),
@@ -139,7 +152,9 @@ class ExactIntersector:
     gap : float
         Surfaces farther apart than this are certainly disjoint (whole-pose culling).
     cull : geometry.bvh.MeshPair or None
-        The broad phase.
+        The broad phase's BVHs: None until a `volumes` call has enough poses the kernel's own
+        test leaves open (`culling.worth_building`), and always None without a broad phase.
+        Culling never changes a result.
     areas : float
         Both unions' surface areas, summed (the boolean's error bound).
     """
@@ -149,11 +164,11 @@ class ExactIntersector:
         hand_links: list[Mesh],
         object_bodies: list[Mesh],
         broadphase: str | None = defaults.EXACT_BROADPHASE,
-        n_jobs: int = 1,
+        n_jobs: int | None = defaults.EXACT_N_JOBS,
         **tuning: Any,
     ):
         tuning = check_options(broadphase, n_jobs, tuning, type(self).__name__)
-        self.n_jobs = (os.cpu_count() or 1) if n_jobs == -1 else int(n_jobs)
+        self.n_jobs = None if n_jobs is None else int(n_jobs)
         # Everything is in local coordinates about the centre of the hand's bounds, the unions
         # too (manifold3d's tolerance grows with the coordinates' magnitude), so that rounding
         # depends on the geometry's size, not on where it lies.
@@ -184,10 +199,12 @@ class ExactIntersector:
         self.object_tables = object_tables(self.object_mesh)
         # Surfaces farther apart than this are certainly disjoint whatever the BVH's rounding.
         self.gap = CULL_GAP * scale
-        feature = f"the exact backend's {broadphase} broad phase"
-        self.cull = (
-            None if broadphase is None else MeshPair(broadphase, AV, AF, BV, BF, self.gap, feature)
-        )
+        self.feature = f"the exact backend's {broadphase} broad phase"
+        if broadphase is not None:
+            require_engine(broadphase, self.feature)  # refused now, not at the first call
+        # Built on first need (`broad_phase`): it costs more than it saves on a few poses.
+        self.cull: MeshPair | None = None
+        self._cull_lock = threading.Lock()
         # Connected shells (vertex -> shell) of hand and object, for the culling.
         self.shells = (
             shell_labels(self.hand_mesh.vertices, self.hand_mesh.edges),
@@ -204,18 +221,44 @@ class ExactIntersector:
         self.volume_bounds: np.ndarray = np.empty(0)
         self.areas = float(self.hand_solid.surface_area() + self.object_solid.surface_area())
 
-    def _chunk(self, poses: np.ndarray):
-        """Volumes, bounds, codes and statistics of poses (k, 4, 4) in local coordinates."""
+    def broad_phase(self, poses: np.ndarray) -> np.ndarray | None:
+        """`culling.crossing_poses` of poses (k, 4, 4; local coordinates) with the BVHs built,
+        or None: no broad phase, or too few open poses to build it (`culling.worth_building`)
+        and not built before."""
+        if self.broadphase is None or not len(poses):
+            return None
+        triangles = len(self.hand_mesh.faces) + len(self.object_mesh.faces)
+        if self.cull is None and not worth_building(len(poses), triangles):
+            return None  # too few even if every pose were open: skip the test too
+        crossing = crossing_poses(
+            poses, self.hand_mesh, self.hand_grid, self.object_mesh, self.object_grid,
+            self.shells,
+        )  # fmt: skip
+        if self.cull is None:
+            if not worth_building(int(np.count_nonzero(~crossing)), triangles):
+                return None
+            with self._cull_lock:
+                if self.cull is None:
+                    self.cull = MeshPair(
+                        self.broadphase, self.hand_mesh.vertices, self.hand_mesh.faces,
+                        self.object_mesh.vertices, self.object_mesh.faces, self.gap,
+                        self.feature,
+                    )  # fmt: skip
+        return crossing
+
+    def _chunk(self, poses: np.ndarray, crossing: np.ndarray | None = None):
+        """Volumes, bounds, codes and statistics of poses (k, 4, 4) in local coordinates;
+        ``crossing`` (k,) from `broad_phase` culls, None does not."""
         n = len(poses)
         out = np.zeros(n)
         bounds = np.zeros(n)
         codes = np.zeros(n, np.int64)
         stats = np.zeros((n, N_STATS), np.int64)
         todo = np.ones(n, bool)
-        if self.cull is not None:
+        if crossing is not None and self.cull is not None:
             culled = culled_poses(
                 poses, self.cull, self.hand_mesh, self.hand_grid, self.object_mesh,
-                self.object_grid, self.shells,
+                self.object_grid, self.shells, crossing,
             )  # fmt: skip
             codes[culled] = CULLED
             todo[culled] = False
@@ -251,13 +294,18 @@ class ExactIntersector:
         crumbs = BOOLEAN_ROUNDING * tolerance * self.areas
         return (0.0 if volume <= crumbs else float(volume)), bound
 
-    def volumes(self, poses: np.ndarray) -> np.ndarray:
+    def volumes(
+        self, poses: np.ndarray, progress: Callable[[int], Any] | None = None
+    ) -> np.ndarray:
         """Exact intersection volume for each pose.
 
         Parameters
         ----------
         poses : numpy.ndarray, shape (..., 4, 4)
             Rigid transforms of the object: vertex ``x`` moves to ``R @ x + t``.
+        progress : callable, optional
+            Called in the calling thread with the number of poses finished since its last
+            call, as each piece of the work ends (the counts add up to the number of poses).
 
         Returns
         -------
@@ -266,7 +314,7 @@ class ExactIntersector:
             ``poses_repeated`` (equal to an earlier pose to rounding, see `repeated_poses`:
             computed once), ``poses_culled`` (skipped by the broad phase), ``poses_boolean``
             (recomputed with a manifold3d boolean: uncertain sign or overflow), ``parts``
-            (hand grid cells),
+            (hand grid cells), ``threads`` (threads run),
             ``parts_culled`` / ``parts_inside`` / ``parts_clipped`` (summed over poses:
             cells away from the object's surface and outside / inside it, cells it crosses),
             ``pairs_tested`` / ``pairs_crossing`` (face pairs) and ``seconds``; and
@@ -288,20 +336,36 @@ class ExactIntersector:
         uniq, back = np.unique(rep, return_inverse=True)
         flat = np.ascontiguousarray(every[uniq])
         n = len(flat)
-        jobs = max(1, min(self.n_jobs, n))
+        crossing = self.broad_phase(flat)
+        jobs = max(1, min(resolve_jobs(self.n_jobs), n))
+        # One piece without threads or progress; else pieces interleaved over the poses, so
+        # that each mixes cheap and costly ones.
+        pieces = 1
+        if jobs > 1 or progress is not None:
+            pieces = max(jobs, min(jobs * PIECES_PER_THREAD, n // PIECE_POSES))
+        parts = [np.arange(k, n, pieces) for k in range(pieces)]
+        weight = np.bincount(back.reshape(-1), minlength=n)
+        out = np.empty(n)
+        bounds = np.empty(n)
+        codes = np.empty(n, np.int64)
+        stats = np.empty((n, N_STATS), np.int64)
+
+        def run(ix: np.ndarray):
+            return self._chunk(flat[ix], None if crossing is None else crossing[ix])
+
+        def store(ix: np.ndarray, result: tuple) -> None:
+            out[ix], bounds[ix], codes[ix], stats[ix] = result
+            if progress is not None:
+                progress(int(weight[ix].sum()))
+
         if jobs == 1:
-            out, bounds, codes, stats = self._chunk(flat)
+            for ix in parts:
+                store(ix, run(ix))
         else:
-            # Interleaved chunks balance poses of different cost across threads.
-            parts = [np.arange(k, n, jobs) for k in range(jobs)]
             with ThreadPoolExecutor(jobs) as ex:
-                res = list(ex.map(lambda ix: self._chunk(flat[ix]), parts))
-            out = np.empty(n)
-            bounds = np.empty(n)
-            codes = np.empty(n, np.int64)
-            stats = np.empty((n, N_STATS), np.int64)
-            for ix, (o, b, c, s) in zip(parts, res, strict=True):
-                out[ix], bounds[ix], codes[ix], stats[ix] = o, b, c, s
+                futures = {ex.submit(run, ix): k for k, ix in enumerate(parts)}
+                for future in as_completed(futures):
+                    store(parts[futures[future]], future.result())
         pairs = stats[:, [STAT_PAIRS, STAT_CROSSING]].sum(0)
         out, bounds, codes, stats = out[back], bounds[back], codes[back], stats[back]
         tot = stats.sum(0)
@@ -311,6 +375,7 @@ class ExactIntersector:
             "poses_culled": int((codes == CULLED).sum()),
             "poses_boolean": int(((codes == DEGENERATE) | (codes == OVERFLOW)).sum()),
             "parts": len(self.hand_tables.parts) - 1,
+            "threads": jobs,
             "parts_culled": int(tot[STAT_CELLS_OUTSIDE]),
             "parts_inside": int(tot[STAT_CELLS_INSIDE]),
             "parts_clipped": int(tot[STAT_CELLS_TOUCHED]),
@@ -321,44 +386,3 @@ class ExactIntersector:
         self.pose_sources = POSE_SOURCES[codes].reshape(poses.shape[:-2])
         self.volume_bounds = bounds.reshape(poses.shape[:-2])
         return out.reshape(poses.shape[:-2])
-
-
-#: Poses whose matrices differ by at most this many units in the last place of their largest
-#: entry are one pose (see `repeated_poses`).
-SAME_POSE_ULPS = 16
-#: `repeated_poses` first groups poses on a grid of this many steps per unit, far coarser than
-#: `SAME_POSE_ULPS` (a pair split by a grid line is merely computed twice).
-POSE_GRID = 2.0**36
-
-
-def repeated_poses(poses: np.ndarray) -> np.ndarray:
-    """For each pose, the index of the first pose equal to it to rounding.
-
-    Two poses are equal to rounding when no entry of their matrices differs by more than
-    `SAME_POSE_ULPS` units in the last place of the larger one's largest entry (about 4e-15
-    for a rotation and a translation of length up to 1). Moving the object's vertices with
-    either pose rounds them by more than the two poses differ, so their exact volumes differ by
-    no more than the rounding the kernel already makes. Such repeats are common: a rotation
-    by ``a`` about ``w`` is a rotation by ``-a`` about ``-w``, and the balanced preset's four
-    axes include both poles, so 1,080 of its 4,266 poses repeat another one to rounding.
-
-    Parameters
-    ----------
-    poses : numpy.ndarray, shape (n, 4, 4)
-
-    Returns
-    -------
-    numpy.ndarray, shape (n,), int64
-        ``rep[i] <= i``; ``rep[i] == i`` for the first pose of each group.
-    """
-    n = len(poses)
-    rows = poses[:, :3, :].reshape(n, 12)
-    # Group on a grid far coarser than the tolerance, then keep only true neighbours.
-    _, first, inv = np.unique(
-        np.round(rows * POSE_GRID), axis=0, return_index=True, return_inverse=True
-    )
-    rep = first[inv.reshape(-1)]
-    scale = np.maximum(np.abs(rows).max(1), np.abs(rows[rep]).max(1))
-    tol = SAME_POSE_ULPS * np.spacing(np.maximum(scale, 1.0))
-    same = np.abs(rows - rows[rep]).max(1) <= tol
-    return np.where(same, rep, np.arange(n)).astype(np.int64)

@@ -19,7 +19,12 @@ PARAMETERS: dict[str, Param] = {
     "broadphase": Param(
         Options(BROADPHASES), hint="library of the broad phase; None tests every pose in full"
     ),
-    "n_jobs": Param(Interval(int, 1, None), Options((-1,)), hint="threads; -1 uses every core"),
+    "n_jobs": Param(
+        Interval(int, 1, None),
+        Options((-1,)),
+        None,
+        hint="threads; None uses every core (one in a batch worker), -1 every core",
+    ),
     **{
         key: Param(
             Interval(float, 0, None, closed="neither"),

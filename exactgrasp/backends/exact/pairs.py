@@ -32,7 +32,8 @@ def _edges_through(
 ):  # fmt: skip
     """The edges of face f (of mesh V, F, row `row` of `sg`/`dt`) that cross triangle abc of
     the other mesh: each crossing point goes to P (the first two: coordinates, error bound,
-    whether it starts the common segment, see `crossing_starts`), and the edge's owning face
+    whether it starts the common segment (see `crossing_starts`), ``row`` and the face corner k
+    of the crossed edge k -> k + 1), and the edge's owning face
     records the crossing (edge, parameter, parameter error) once. ``dt[row, 3]`` bounds the
     error of that row's values; ``g`` bounds every coordinate. Returns (points so far, code)
     with code `DEGENERATE` for an uncertain sign and `OVERFLOW` for a full record buffer."""
@@ -65,6 +66,8 @@ def _edges_through(
                     span = max(span, abs(V[v, d] - V[u, d]))
                 P[npt, 3] = point_err(dl, span, g)
                 P[npt, 4] = 1.0 if crossing_starts(row, sg[row, k], sg[row, k1]) else 0.0
+                P[npt, 5] = row
+                P[npt, 6] = k
             npt += 1
             if TO[f, k]:
                 if nrec[row] >= cap:
@@ -205,7 +208,7 @@ def corner_crossing(
     row, k0, i0, i1, i2, x0, y0, z0, x1, y1, z1, x2, y2, z2, d0, d1, d2, err, g
 ):  # fmt: skip
     """Where the edge from corner k0 to corner k0 + 1 of a face crosses the other face's plane,
-    decided on the planes' common line (`search.object_faces`), for the hand's face (``row``
+    decided on the planes' common line (`search.trace_pairs`), for the hand's face (``row``
     0) or the object's (1).
 
     ``i*`` are the face's vertex indices, ``x*, y*, z*`` its corners, ``d*`` their signed

@@ -1,9 +1,10 @@
 """The exact kernel's per-pose driver (numba): hand ∩ moved object for a batch of poses.
 
 Each pose runs the stages of "Method, per pose" in ``docs/exact-backend.md`` in order: move
-(`move_object`), search and pairs (`search.object_faces`), classify
-(`classify.classify_vertices`) and sum (`sums.volume_sum`). The tables are `tables`' named
-tuples. Imports numba, `classify`, `search`, `sums`, `tables` and `tolerances`.
+(`move_object`), seeds (`seeds.object_edge_seeds`, `seeds.cotree_seeds`), pairs
+(`search.trace_pairs`), classify (`classify.classify_vertices`) and sum (`sums.volume_sum`).
+The tables are `tables`' named tuples. Imports numba, `classify`, `search`, `seeds`, `sums`,
+`tables` and `tolerances`.
 """
 
 from __future__ import annotations
@@ -12,9 +13,17 @@ import numpy as np
 from numba import njit
 
 from exactgrasp.backends.exact.classify import classify_vertices
-from exactgrasp.backends.exact.search import near_chunks, object_faces
+from exactgrasp.backends.exact.search import trace_pairs
+from exactgrasp.backends.exact.seeds import (
+    cotree_seeds,
+    frame_defect,
+    near_runs,
+    object_edge_seeds,
+)
 from exactgrasp.backends.exact.sums import face_terms, volume_sum
 from exactgrasp.backends.exact.tables import (
+    COTREE_BLOCK,
+    GROW,
     OK,
     STAT_CELLS_INSIDE,
     STAT_CELLS_OUTSIDE,
@@ -25,7 +34,11 @@ from exactgrasp.backends.exact.tables import (
     PoseScratch,
     Workspace,
 )
-from exactgrasp.backends.exact.tolerances import LENGTH_FLOOR, ROUNDING_PAD
+from exactgrasp.backends.exact.tolerances import LENGTH_FLOOR, ROUNDING_PAD, U
+
+#: First size of the pair table (a power of two) and of the seed buffer; both double when a
+#: pose needs more (the pose is then computed again).
+PAIR_TABLE, SEED_ROWS = 2**14, 2**13
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -51,27 +64,25 @@ def move_object(R, t, BV0, BF, tiny, bmax, BV, BD, BN):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _clear_records(W):
-    """Clear the crossing counters where the last pose set them, the records and the marked
-    cells (face stamps are unique per pose, ``ip * m + s``, so neither needs a pass over a
-    whole mesh)."""
+    """Clear the crossing counters where the last pose set them, and the records (the pair
+    table is stamped per pose, so it needs no pass)."""
     acnt, bcnt, nrec = W.hand_count, W.object_count, W.nrec
     for k in range(nrec[0]):
         acnt[W.hand_rec.edge[k]] = 0
     for k in range(nrec[1]):
         bcnt[W.object_rec.edge[k]] = 0
     nrec[:] = 0
-    W.cell_reached[:] = False
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _cell_stats(stats, ip, parts, reached, AS):
-    """The hand parts of pose ``ip`` whose cell the object's surface reached, and of the others
-    those inside and outside (from their first vertex's status ``AS``)."""
+def _cell_stats(stats, ip, parts, uniform, AS):
+    """The hand parts of pose ``ip`` classified vertex by vertex, and of the others (classified
+    whole, ``uniform``) those inside and outside (from their first vertex's status ``AS``)."""
     nparts = parts.shape[0] - 1
     touched = 0
     inside = 0
     for k in range(nparts):
-        if reached[parts[k, 0]]:
+        if not uniform[k]:
             touched += 1
         elif AS[parts[k, 1]] == 1:
             inside += 1
@@ -81,25 +92,35 @@ def _cell_stats(stats, ip, parts, reached, AS):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, cap):
-    """The per-pose scratch arrays (`tables.PoseScratch`), ``cap`` crossings per mesh."""
-    na, nb = hand_mesh.vertices.shape[0], object_mesh.vertices.shape[0]
-    ma, mb = hand_mesh.faces.shape[0], object_mesh.faces.shape[0]
-    acs = hand_grid.cell_start
-    work = Workspace(
+def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows):
+    """The search's scratch arrays (`tables.Workspace`): ``cap`` crossings per mesh, a pair
+    table of ``pairs`` slots (a power of two), ``rows`` seed rows."""
+    acs, bcs = hand_grid.cell_start, object_grid.cell_start
+    longest = max(1, np.max(acs[1:] - acs[:-1]), np.max(bcs[1:] - bcs[:-1]))
+    return Workspace(
         np.zeros(hand_mesh.edges.shape[0], np.int64),
         np.zeros(object_mesh.edges.shape[0], np.int64),
         Crossings(np.empty(cap, np.int64), np.empty(cap), np.empty(cap)),
         Crossings(np.empty(cap, np.int64), np.empty(cap), np.empty(cap)),
         np.zeros(2, np.int64),
-        np.full(ma, -1, np.int64),
-        np.empty((2, 5)),
+        np.zeros(pairs, np.int64),
+        np.zeros(pairs, np.int32),
+        np.empty((rows, 2), np.int64),
+        np.empty((2, 7)),
         np.empty((2, 3), np.int64),
         np.empty((2, 4)),
         np.empty((3, 2), np.int64),
-        np.zeros(acs.shape[0] - 1, np.bool_),
-        np.empty(max(1, np.max(acs[1:] - acs[:-1])), np.int64),
+        np.zeros(hand.parts.shape[0] - 1, np.bool_),
+        np.empty(longest, np.int64),
     )
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, work):
+    """The per-pose scratch arrays (`tables.PoseScratch`), ``cap`` crossings per mesh, around
+    the search's ``work``."""
+    na, nb = hand_mesh.vertices.shape[0], object_mesh.vertices.shape[0]
+    ma, mb = hand_mesh.faces.shape[0], object_mesh.faces.shape[0]
     return PoseScratch(
         np.empty_like(object_mesh.vertices),
         np.empty((mb, 3)),
@@ -112,7 +133,10 @@ def _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, cap):
         np.empty(3),
         np.full(ma, -1, np.int64),
         np.full(mb, -1, np.int64),
-        np.zeros(obj.face_runs.shape[0], np.bool_),
+        np.zeros(obj.edge_runs.shape[0], np.bool_),
+        np.zeros(hand.cotree_runs.shape[0], np.bool_),
+        np.zeros(hand.cotree_blocks.shape[0], np.bool_),
+        np.zeros(0, np.bool_),
         work,
     )
 
@@ -160,10 +184,13 @@ def pose_volumes(
     """
     AV = hand_mesh.vertices
     BV0, BF = object_mesh.vertices, object_mesh.faces
-    mb = BF.shape[0]
-    scratch = _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, cap)
+    pairs, rows = PAIR_TABLE, SEED_ROWS
+    work = _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows)
+    scratch = _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, work)
     W = scratch.work
     token = -1
+    attempt = 0
+    hcell = hand_grid.cell
     # Bounds on every vertex's length (hand; object in its frame): the error bounds'
     # coordinate scale. The coordinates are local (about the hand's centre), so it measures
     # the geometry's size, not its position.
@@ -176,13 +203,60 @@ def pose_volumes(
             R, t, BV0, BF, tiny, bmax, scratch.object_V, scratch.object_D, scratch.object_N
         )
         gscale = max(amax, gb)
-        _clear_records(W)
-        near_chunks(obj.face_runs, R, t, hand_grid, W.cell_range, scratch.near)
-        seg, segerr, ncross, npairs, code = object_faces(
-            hand_mesh, hand, hand_grid, object_mesh, obj, scratch.object_V, scratch.object_D,
-            scratch.object_N, W, gscale, gb, ip * mb, scratch.near,
+        # The object's frame is reached with R^T, which differs from the inverse by R's
+        # departure from a rotation: the seeds found there widen their tolerances by it.
+        defect = frame_defect(R)
+        stretch = 1.0 + 4.0 * defect + 16.0 * U
+        ferr = 2.0 * (4.0 * defect + 16.0 * U) * gscale
+        near_runs(
+            obj.edge_runs, R, t, False, stretch, False, hand_grid, W.cell_range, scratch.none,
+            1, scratch.near,
         )  # fmt: skip
-        # After the search: the cells it marked tell which parts are classified whole.
+        # The co-tree's runs in two levels: blocks of runs by the surface cells alone, then the
+        # runs of near blocks against what those cells hold.
+        near_runs(
+            hand.cotree_blocks, R, t, True, stretch, False, object_grid, W.cell_range,
+            scratch.none, 1, scratch.near_block,
+        )  # fmt: skip
+        near_runs(
+            hand.cotree_runs, R, t, True, stretch, True, object_grid, W.cell_range,
+            scratch.near_block, COTREE_BLOCK, scratch.near_cotree,
+        )  # fmt: skip
+        while True:
+            attempt += 1
+            if attempt >= 2**30:
+                # The pair table's tags would overflow: start them again.
+                W.pair_tags[:] = 0
+                attempt = 1
+            _clear_records(W)
+            nseeds = object_edge_seeds(
+                object_mesh, obj, hand, hand_grid, scratch.object_V, scratch.near, gscale, W, 0
+            )
+            if nseeds >= 0:
+                nseeds = cotree_seeds(
+                    hand_mesh, hand, obj, object_grid, R, t, scratch.near_cotree, gscale, ferr,
+                    hcell, W, nseeds,
+                )  # fmt: skip
+            if nseeds < 0:
+                rows *= 2
+            else:
+                seg, segerr, ncross, npairs, code = trace_pairs(
+                    hand_mesh, hand, object_mesh, obj, scratch.object_V, scratch.object_D,
+                    scratch.object_N, W, nseeds, gscale, gb, hcell, attempt,
+                )  # fmt: skip
+                if code != GROW:
+                    break
+                pairs *= 2
+            # A table was too small: the pose starts again with larger ones.
+            _clear_records(W)
+            W = _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows)
+            scratch = PoseScratch(
+                scratch.object_V, scratch.object_D, scratch.object_N, scratch.hand_status,
+                scratch.object_status, scratch.uniform, scratch.queue, scratch.multi,
+                scratch.point, scratch.hand_stamp, scratch.object_stamp, scratch.near,
+                scratch.near_cotree, scratch.near_block, scratch.none, W,
+            )  # fmt: skip
+        # After the search: the parts whose own edges nothing crosses are classified whole.
         code, token = classify_vertices(
             R, t, hand_mesh, hand, object_mesh, obj, hand_grid, object_grid, scratch, code, token
         )
@@ -195,4 +269,4 @@ def pose_volumes(
         codes[ip] = code
         stats[ip, STAT_PAIRS] = npairs
         stats[ip, STAT_CROSSING] = ncross
-        _cell_stats(stats, ip, hand.parts, W.cell_reached, scratch.hand_status)
+        _cell_stats(stats, ip, hand.parts, scratch.uniform, scratch.hand_status)

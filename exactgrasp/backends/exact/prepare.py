@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from exactgrasp.backends.exact.grids import cell_boxes, cell_patches, cell_reps, next_listed
+from exactgrasp.backends.exact.grids import cell_reps, morton_order, part_order
 from exactgrasp.backends.exact.sums import face_terms
 from exactgrasp.backends.exact.tables import (
     CHUNK,
+    COTREE_BLOCK,
+    COTREE_CHUNK,
     CellGrid,
     HandTables,
     MeshTables,
@@ -199,36 +201,116 @@ def part_edges(mesh: MeshTables, reps: np.ndarray, AW: np.ndarray, WL: np.ndarra
     return mesh, epart, wsum, split.astype(np.int64)
 
 
-def face_runs(V: np.ndarray, F: np.ndarray, size: int) -> np.ndarray:
-    """Bounding spheres of the runs of `size` consecutive faces (the last run may be
-    shorter): shape (runs, 4), centre and radius; the radius is widened by `RADIUS_PAD` of
-    the mesh's scale to cover rounding."""
-    runs = -(-len(F) // size)
-    pad = np.concatenate([F, np.repeat(F[-1:], runs * size - len(F), axis=0)])
-    T = V[pad].reshape(runs, size * 3, 3)
+def segment_runs(V: np.ndarray, E: np.ndarray, size: int) -> np.ndarray:
+    """Bounding spheres of the runs of `size` consecutive segments E (k, 2) of vertices V (the
+    last run may be shorter): shape (runs, 4), centre and radius; the radius is widened by
+    `RADIUS_PAD` of the mesh's scale to cover rounding."""
+    runs = -(-len(E) // size)
+    if runs == 0:
+        return np.zeros((0, 4))
+    pad = np.concatenate([E, np.repeat(E[-1:], runs * size - len(E), axis=0)])
+    T = V[pad].reshape(runs, size * 2, 3)
     centre = 0.5 * (T.max(1) + T.min(1))
     radius = np.linalg.norm(T - centre[:, None], axis=2).max(1)
     radius += RADIUS_PAD * max(1.0, float(np.abs(V).max()))
     return np.ascontiguousarray(np.column_stack([centre, radius]))
 
 
-def hand_tables(mesh: MeshTables, grid: CellGrid, tiny: float) -> tuple[MeshTables, HandTables]:
-    """The fixed hand's tables, its vertices numbered cell by cell in `grid`
-    (`grids.cell_order`); faces with ``|N|² <= tiny`` get ``D = 0``.
+def cotree_edges(mesh: MeshTables) -> np.ndarray:
+    """The edges of a mesh that a spanning forest of its dual graph (faces joined across their
+    edges) leaves out, the forest keeping the longest edges: about one edge per vertex, the
+    shortest ones.
 
-    Returns the mesh with its adjacency reordered by part (`part_edges`) and its
-    `tables.HandTables`.
+    A closed curve on the mesh that visits each face at most once, moving from face to face
+    across edges (a plane's section of the mesh inside one face of the other mesh), is a cycle
+    of the dual graph, so it crosses one of these edges (`seeds.cotree_seeds`). Shape (k,),
+    int64, edge indices."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import minimum_spanning_tree
+
+    V, E, ET, m = mesh.vertices, mesh.edges, mesh.edge_faces, len(mesh.faces)
+    length = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+    # Weights in [1, 2], smallest for the longest edges (a weight of 0 would mean no edge).
+    weight = 2.0 - length / max(float(length.max(initial=0.0)), LENGTH_FLOOR)
+    a, b = ET.min(1), ET.max(1)
+    key = a * m + b
+    uniq, first = np.unique(key, return_index=True)
+    tree = minimum_spanning_tree(
+        coo_matrix((weight[first], (a[first], b[first])), shape=(m, m))
+    ).tocoo()
+    row, col = tree.row.astype(np.int64), tree.col.astype(np.int64)
+    picked = np.isin(uniq, np.minimum(row, col) * m + np.maximum(row, col))
+    in_tree = np.zeros(len(E), bool)
+    in_tree[first[picked]] = True
+    # Two faces sharing several edges keep one in the forest; the others are co-tree edges.
+    return np.flatnonzero(~in_tree).astype(np.int64)
+
+
+def face_filters(V: np.ndarray, F: np.ndarray, N: np.ndarray, coef: np.ndarray) -> tuple:
+    """What the seeds' filters read per face (`tables.HandTables.filters`, ``filter_err``): its
+    unit normal and plane offset, and per corner k the unit normal of edge k -> k + 1 within
+    the face's plane, pointing into the face (``N × (c_{k+1} - c_k)`` normalised, N the face's
+    normal), and its offset, all in single precision (`tolerances.FILTER_ERR` covers that); a
+    point x of the face's plane lies in the face where every ``normal · x - offset >= 0``.
+    Zeros for a face without a normal (such faces are never filtered out). ``coef`` (m,) is
+    each face's `search.plane_err_coef`, rounded up to single precision.
+
+    Returns (filters (m, 16) float32, filter_err (m,) float32)."""
+    out = np.zeros((len(F), 16))
+    norm = np.linalg.norm(N, axis=1)
+    unit = np.divide(N, norm[:, None], out=np.zeros_like(N), where=norm[:, None] > 0)
+    out[:, :3] = unit
+    out[:, 3] = np.einsum("ij,ij->i", unit, V[F[:, 0]])
+    for k in range(3):
+        a, b = V[F[:, k]], V[F[:, (k + 1) % 3]]
+        side = np.cross(N, b - a)
+        norm = np.linalg.norm(side, axis=1)
+        side = np.divide(side, norm[:, None], out=np.zeros_like(side), where=norm[:, None] > 0)
+        out[:, 4 + 4 * k : 7 + 4 * k] = side
+        out[:, 7 + 4 * k] = np.einsum("ij,ij->i", side, a)
+    err = coef.astype(np.float32)
+    err[err < coef] = np.nextafter(err, np.float32(np.inf))[err < coef]
+    return np.ascontiguousarray(out.astype(np.float32)), np.ascontiguousarray(err)
+
+
+def hand_tables(mesh: MeshTables, grid: CellGrid, tiny: float) -> tuple[MeshTables, HandTables]:
+    """The fixed hand's tables, its vertices numbered part by part (`grids.part_order`, cell by
+    cell in `grid`); faces with ``|N|² <= tiny`` get ``D = 0``.
+
+    Returns the mesh with its vertices renumbered and its adjacency reordered by part
+    (`part_edges`), and its `tables.HandTables`.
     """
+    order, part = part_order(mesh.vertices, mesh.faces, grid.cell)
+    rank = np.empty(len(order), np.int64)
+    rank[order] = np.arange(len(order))
+    mesh = prepare_mesh(
+        np.ascontiguousarray(mesh.vertices[order]), np.ascontiguousarray(rank[mesh.faces])
+    )
     AV, AF = mesh.vertices, mesh.faces
     AD, AN, AP, AW, WL = face_edge_terms(AV, AF, mesh.edges, mesh.edge_faces, tiny)
     T = AV[AF]
     ABB = np.ascontiguousarray(np.hstack([T.min(1), T.max(1)]))
-    # The bounding boxes again in the order of the grid's cell lists, so that the search
-    # reads them sequentially, each clipped to its cell (grown by the kernel's margin):
-    # a crossing in that cell lies in the clipped box.
-    CBB = cell_boxes(grid, ABB)
-    reps = cell_reps(AV, grid.cell)
+    reps = cell_reps(AV, grid.cell, part)
     mesh, epart, wsum, split = part_edges(mesh, reps, AW, WL)
+    cotree = cotree_edges(mesh)
+    # Runs of nearby co-tree edges, the short ones (within a cell) first: a run's sphere then
+    # stays small.
+    ends = AV[mesh.edges[cotree]]
+    long = np.abs(ends[:, 1] - ends[:, 0]).max(1) > grid.cell
+    order = morton_order(ends.mean(1))
+    cotree = cotree[order[np.argsort(long[order], kind="stable")]]
+    filters, filter_err = face_filters(AV, AF, AN, AP[:, 4])
+    records = np.zeros((len(AF), 24))
+    records[:, :6] = AP
+    records[:, 6:15] = AV[AF].reshape(-1, 9)
+    records[:, 15:18] = AD
+    ET = mesh.edge_faces[mesh.face_edges]
+    across = np.where(ET[:, :, 0] == np.arange(len(AF))[:, None], ET[:, :, 1], ET[:, :, 0])
+    links = np.zeros((len(AF), 16), np.int32)
+    links[:, :3] = AF
+    links[:, 3:6] = mesh.face_edges
+    links[:, 6:9] = across
+    links[:, 9:12] = mesh.face_owns
     tables = HandTables(
         D=AD,
         normals=AN,
@@ -236,25 +318,37 @@ def hand_tables(mesh: MeshTables, grid: CellGrid, tiny: float) -> tuple[MeshTabl
         planes=AP,
         parts=reps,
         edge_weights=AW,
-        cell_boxes=CBB,
-        next_listed=next_listed(grid),
-        cell_bounds=cell_patches(grid, AV, AF, AN, ABB),
         edge_part=epart,
         part_weights=wsum,
         adj_split=split,
         d_cost=np.empty(0),
+        filters=filters,
+        filter_err=filter_err,
+        face_records=records,
+        face_links=links,
+        cotree=np.ascontiguousarray(cotree),
+        cotree_runs=segment_runs(AV, mesh.edges[cotree], COTREE_CHUNK),
+        cotree_blocks=segment_runs(AV, mesh.edges[cotree], COTREE_CHUNK * COTREE_BLOCK),
     )
     return mesh, tables
 
 
 def object_tables(mesh: MeshTables) -> ObjectTables:
     """The object's pose-independent tables (`tables.ObjectTables`), in its own frame."""
-    BV, BF = mesh.vertices, mesh.faces
+    BV, BF, BE = mesh.vertices, mesh.faces, mesh.edges
     # What each face's rounded D can cost (rigid motions keep it).
     BN = np.cross(BV[BF[:, 1]] - BV[BF[:, 0]], BV[BF[:, 2]] - BV[BF[:, 0]])
+    l1l2, kappa = face_conditioning(BV, BF, BN)
+    # `search.plane_err_coef` for every face, as for the hand's.
+    coef = np.where(kappa <= KAPPA_MAX, PLANE_ERR * U * (1.0 + kappa), PLANE_ERR_NONE)
+    order = morton_order(BV[BE].mean(1))
+    filters, filter_err = face_filters(BV, BF, BN, coef)
     return ObjectTables(
-        face_runs=face_runs(BV, BF, CHUNK),
-        d_cost=np.ascontiguousarray(face_d_coefs(*face_conditioning(BV, BF, BN))),
+        edge_order=np.ascontiguousarray(order),
+        edge_runs=segment_runs(BV, BE[order], CHUNK),
+        filters=filters,
+        filter_err=filter_err,
+        d_cost=np.ascontiguousarray(face_d_coefs(l1l2, kappa)),
         # The object is one part, never classified whole.
         parts=np.array([[-1, 0], [-1, len(BV)]], np.int64),
         whole=np.zeros(1, np.bool_),

@@ -18,13 +18,18 @@ import numpy as np
 #: exactly 0), an uncertain sign or an inconsistent sum, a full crossing buffer (the caller
 #: recomputes the last two with a boolean).
 OK, CULLED, DEGENERATE, OVERFLOW = 0, 1, 2, 3
-#: Columns of the per-pose statistics array: face pairs tried, crossing pairs, hand parts whose
-#: cell the object's surface reached, parts classified whole inside, and outside.
+#: A per-pose scratch table was too small: the driver enlarges it and computes the pose again
+#: (never returned by `pose.pose_volumes`).
+GROW = 4
+#: Columns of the per-pose statistics array: face pairs evaluated, crossing pairs, hand parts
+#: classified vertex by vertex, parts classified whole inside, and outside.
 STAT_PAIRS, STAT_CROSSING, STAT_CELLS_TOUCHED, STAT_CELLS_INSIDE, STAT_CELLS_OUTSIDE = range(5)
 N_STATS = 5
-#: Object faces are tested in runs of this many consecutive faces first
-#: (`ObjectTables.face_runs`, `search.near_chunks`).
-CHUNK = 16
+#: Seed edges are tested in runs of this many consecutive edges first, one bounding sphere per
+#: run (`ObjectTables.edge_runs`, `HandTables.cotree_runs`, `seeds.near_runs`).
+CHUNK, COTREE_CHUNK = 16, 8
+#: The co-tree's runs are first tested in blocks of this many runs (`HandTables.cotree_blocks`).
+COTREE_BLOCK = 8
 
 
 class MeshTables(NamedTuple):
@@ -72,6 +77,15 @@ class CellGrid(NamedTuple):
     #: ((shape + 1).prod(),) int64: summed-volume table of the surface cells, flat, so that a
     #: box of cells' count takes 8 reads (`cells.surface_cells_in`).
     surface_table: np.ndarray
+    #: (listed, 6) float32: the listed faces' bounding boxes, in the order of `cell_faces`, each
+    #: clipped to its cell (grown by `GRID_MARGIN`, rounded outwards): a crossing in that cell
+    #: lies in that box.
+    boxes: np.ndarray
+    #: (cells, 11) float64: per cell, a unit axis (its faces' area-weighted mean normal), their
+    #: extent along it (min, max; widened by `GRID_MARGIN`) and their common bounding box clipped
+    #: to the cell (min xyz, max xyz): what the cell holds of the surface lies in that slab and
+    #: box (`grids.cell_patches`).
+    bounds: np.ndarray
 
 
 class HandTables(NamedTuple):
@@ -91,22 +105,13 @@ class HandTables(NamedTuple):
     #: (times the coordinate bound: a plane distance's error), what its rounded ``D`` can cost
     #: (absolute, volume units).
     planes: np.ndarray
-    #: (parts + 1, 2) int64: per part its flat cell index and first vertex; the vertices being
-    #: numbered cell by cell, part k holds vertices ``parts[k, 1]`` to ``parts[k + 1, 1] - 1``.
-    #: The last row is (-1, number of vertices).
+    #: (parts + 1, 2) int64: per part its flat cell index and first vertex. A part is a piece of
+    #: the surface in one cell: the vertices of one hand-grid cell joined by edges inside it.
+    #: The vertices being numbered part by part (cell by cell), part k holds vertices
+    #: ``parts[k, 1]`` to ``parts[k + 1, 1] - 1``. The last row is (-1, number of vertices).
     parts: np.ndarray
     #: (e, 2) float64: ``W_e`` and a bound on its error (volume units).
     edge_weights: np.ndarray
-    #: (listed, 6) float64: `boxes` in the order of the grid's cell lists, each clipped to its
-    #: cell (grown by `GRID_MARGIN`): a crossing in that cell lies in the clipped box.
-    cell_boxes: np.ndarray
-    #: (3, cells) int64: per axis d and cell, the index along d of the first cell at or after
-    #: it, in its line of cells along d, that lists a face (the line's length if none).
-    next_listed: np.ndarray
-    #: (cells, 11) float64: per cell, a unit axis (its faces' area-weighted mean normal), their
-    #: extent along it (min, max; widened by `GRID_MARGIN`) and their common bounding box clipped
-    #: to the cell (min xyz, max xyz).
-    cell_bounds: np.ndarray
     #: (e,) int64: the part of each edge, -1 where its ends lie in two parts.
     edge_part: np.ndarray
     #: (parts, 2) float64: the summed weight of each part's own edges and its error bound.
@@ -117,16 +122,42 @@ class HandTables(NamedTuple):
     #: (0,) float64: empty; what the hand faces' rounded ``D`` costs is in `planes` and
     #: `edge_weights` (the object's is per face, `ObjectTables.d_cost`).
     d_cost: np.ndarray
+    #: (k,) int64: the co-tree edges (`prepare.cotree_edges`), in runs of `COTREE_CHUNK` close
+    #: together.
+    cotree: np.ndarray
+    #: (runs, 4) float64: bounding sphere (centre, radius) of each run of `cotree`.
+    cotree_runs: np.ndarray
+    #: (blocks, 4) float64: bounding sphere of each block of `COTREE_BLOCK` runs.
+    cotree_blocks: np.ndarray
+    #: (m, 16) float32: per face its unit normal and plane offset, then per corner k the unit
+    #: normal of its edge k -> k + 1 in the face's plane, pointing into the face, and its offset
+    #: (`prepare.face_filters`): what the seeds' filters read, one cache line per face.
+    filters: np.ndarray
+    #: (m,) float32: `search.plane_err_coef` of each face (rounded up).
+    filter_err: np.ndarray
+    #: (m, 24) float64: per face, what the pair evaluation reads (`search.trace_pairs`) in three
+    #: cache lines: `planes` (6), its corners' coordinates (9), ``D`` (3), six zeros.
+    face_records: np.ndarray
+    #: (m, 16) int32: per face its vertices (3), the edges of its corners k -> k + 1 (3), the
+    #: faces across those edges (3), whether it owns those edges (3, 0 or 1), four zeros.
+    face_links: np.ndarray
 
 
 class ObjectTables(NamedTuple):
     """The object's pose-independent terms (`prepare.object_tables`), in its own frame.
 
-    ``m`` faces, ``n`` vertices, ``runs`` runs of `CHUNK` faces.
+    ``m`` faces, ``n`` vertices, ``e`` edges, ``runs`` runs of `CHUNK` edges.
     """
 
-    #: (runs, 4) float64: bounding sphere (centre, radius) of each run of consecutive faces.
-    face_runs: np.ndarray
+    #: (e,) int64: the edges in runs of `CHUNK` close together.
+    edge_order: np.ndarray
+    #: (runs, 4) float64: bounding sphere (centre, radius) of each run of `edge_order`.
+    edge_runs: np.ndarray
+    #: (m, 16) float32: the faces' planes and edge normals in the object's frame (as
+    #: `HandTables.filters`).
+    filters: np.ndarray
+    #: (m,) float32: `search.plane_err_coef` of each face (rounded up).
+    filter_err: np.ndarray
     #: (m,) float64: what each face's rounded ``D`` can cost its terms, over the coordinate
     #: bound (`prepare.face_d_coefs`; rigid motions keep it).
     d_cost: np.ndarray
@@ -170,11 +201,16 @@ class Workspace(NamedTuple):
     object_rec: Crossings
     #: (2,) int64: records so far in `hand_rec` and `object_rec`.
     nrec: np.ndarray
-    #: (hand m,) int64: per hand face, the last object face it was paired with (a unique stamp
-    #: per pose and object face).
-    stamp: np.ndarray
-    #: (2, 5) float64: crossing points of a pair: coordinates, error bound, whether it starts
-    #: the common segment.
+    #: (size,) int64: the face pairs evaluated in this pose, an open-addressing hash table
+    #: (`search.trace_pairs`) of keys ``t * (object m) + s``; ``size`` is a power of two.
+    pair_keys: np.ndarray
+    #: (size,) int32: per slot twice the token of the call that filled it, plus 1 where that
+    #: pair crosses (slots of other calls are empty).
+    pair_tags: np.ndarray
+    #: (capacity, 2) int64: candidate pairs (hand face, object face) from the seeds.
+    seeds: np.ndarray
+    #: (2, 7) float64: crossing points of a pair: coordinates, error bound, whether it starts
+    #: the common segment, the mesh of the crossed edge (0 hand, 1 object) and its face corner.
     points: np.ndarray
     #: (2, 3) int64: certain signs of each face's corners against the other's plane (0: none).
     signs: np.ndarray
@@ -182,9 +218,10 @@ class Workspace(NamedTuple):
     dists: np.ndarray
     #: (3, 2) int64: a box of grid cells (inclusive index ranges per axis).
     cell_range: np.ndarray
-    #: (hand cells,) bool: the hand cells some object face reached in this pose.
-    cell_reached: np.ndarray
-    #: (longest cell list,) int64: the listed faces of a cell that pass the box filters.
+    #: (hand parts,) bool: the hand parts one of whose own edges is crossed in this pose.
+    part_crossed: np.ndarray
+    #: (longest cell list of either grid,) int64: the listed faces of a cell that pass the box
+    #: filters.
     survivors: np.ndarray
 
 
@@ -214,7 +251,13 @@ class PoseScratch(NamedTuple):
     hand_stamp: np.ndarray
     #: (object m,) int64: faces already tested by a point test against the object.
     object_stamp: np.ndarray
-    #: (runs,) bool: the object's face runs that may come near the hand's surface.
+    #: (object runs,) bool: the runs of object edges that may come near the hand's surface.
     near: np.ndarray
+    #: (cotree runs,) bool: the runs of hand co-tree edges that may come near the object's.
+    near_cotree: np.ndarray
+    #: (cotree blocks,) bool: the blocks of those runs that may come near it.
+    near_block: np.ndarray
+    #: (0,) bool: empty (no parent level for `seeds.near_runs`).
+    none: np.ndarray
     #: The search's and pair tests' scratch.
     work: Workspace

@@ -41,6 +41,11 @@ NORMAL_FLOOR = 1e-12
 
 # -- plane and term error coefficients -----------------------------------------------------------
 
+#: The seeds' filters read faces' planes and edge normals rounded to single precision: a distance
+#: with them errs by at most ``2**-24 (|n|_1 |x|_inf + |offset|) + 8 U G <= 2**-22 G`` more
+#: (`seeds`; their tolerances add it, times the coordinate bound G).
+FILTER_ERR = 2.0**-22
+
 #: A plane distance ``n·x - n·a`` with the unit normal of a face from its cross product errs by
 #: at most ``U G (25 + 14.2 kappa)`` (``G`` bounds every coordinate, ``kappa`` the face's
 #: conditioning `face_conditioning`; see docs/exact-backend.md): taken as ``32 (1 + kappa)``.

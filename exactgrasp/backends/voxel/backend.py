@@ -3,17 +3,20 @@
 The hand becomes an inside/outside grid (`grids`); the object becomes points (`points`): the
 centres of its interior voxels, each standing for a cube of volume ``V_o``, and samples on its
 surface, each standing for ``w_s``. For every pose the points inside the hand are counted
-(`kernel`). Imports the backends' base, defaults and parameter checks, and its own room.
+(`kernel`), on every core (or as many threads as `backends.base.thread_limit` allows, one in
+a batch worker). Grids, points and the hand's volume are kept per process for every backend
+instance. Imports the backends' base, defaults and parameter checks, and its own room.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 from exactgrasp.backends import defaults
-from exactgrasp.backends.base import Backend, check_poses
+from exactgrasp.backends.base import PROGRESS_PIECES, Backend, check_poses
 from exactgrasp.backends.params import Interval, Options, Param, validate_parameters
 from exactgrasp.backends.voxel.grids import GRID_RULES, HandOccupancy, hand_occupancy
 from exactgrasp.backends.voxel.kernel import estimate_volumes
@@ -29,6 +32,17 @@ __all__ = ["MAX_RESOLUTION", "SURFACE_SAMPLE_MODES", "SURFACE_WEIGHTS", "VoxelBa
 SURFACE_WEIGHTS = ("paper", "area")
 SURFACE_SAMPLE_MODES = ("generate", "none")
 MAX_RESOLUTION = 1000
+
+# Grids, points and hand volumes shared by every VoxelBackend in the process, keyed by the
+# geometry's hash and the parameters they depend on: `compute_descriptor` builds a new backend
+# per call.
+_HAND_GRIDS = LRUCache(defaults.VOXEL_CACHE_SIZE)
+_OBJECT_POINTS = LRUCache(defaults.VOXEL_CACHE_SIZE)
+_HAND_VOLUMES = LRUCache(defaults.VOXEL_CACHE_SIZE)
+
+# Poses per piece at least when progress is reported: a piece takes a fraction of a second,
+# and each starts the kernel's threads anew.
+_PROGRESS_POSES = 8_192
 
 
 class VoxelBackend(Backend):
@@ -128,8 +142,6 @@ class VoxelBackend(Backend):
         self.surface_weight: str = given["surface_weight"]
         self.seed: int = given["seed"]
         self.grid: str = given["grid"]
-        self._hands = LRUCache(defaults.VOXEL_CACHE_SIZE)
-        self._objects = LRUCache(defaults.VOXEL_CACHE_SIZE)
 
     @property
     def params(self) -> dict[str, Any]:
@@ -137,14 +149,24 @@ class VoxelBackend(Backend):
         return {name: getattr(self, name) for name in self.parameter_constraints}
 
     def hand_grid(self, grasp: Grasp) -> HandOccupancy:
-        """The hand's occupancy grid for `grasp` (cached per ``grasp.hand_key``)."""
-        return self._hands.get(
-            getattr(grasp, "hand_key", None),
+        """The hand's occupancy grid for `grasp`.
+
+        Cached in the process per ``grasp.hand_key`` (the hash of the hand's canonical
+        geometry), hand resolution and grid rule, for every `VoxelBackend`.
+        """
+        hand_key = getattr(grasp, "hand_key", None)
+        return _HAND_GRIDS.get(
+            None if hand_key is None else (hand_key, self.hand_resolution, self.grid),
             lambda: hand_occupancy(grasp.canonical_hand_links(), self.hand_resolution, self.grid),
         )
 
     def object_point_set(self, grasp: Grasp) -> ObjectPoints:
-        """The object's points for `grasp` (cached per ``grasp.object_key``)."""
+        """The object's points for `grasp`.
+
+        Cached in the process per ``grasp.object_key`` (the hash of the object's canonical
+        geometry and samples) and the parameters that shape the points, for every
+        `VoxelBackend`.
+        """
 
         def build() -> ObjectPoints:
             supplied = None
@@ -164,10 +186,27 @@ class VoxelBackend(Backend):
                 grid_rule=self.grid,
             )
 
-        return self._objects.get(getattr(grasp, "object_key", None), build)
+        object_key = getattr(grasp, "object_key", None)
+        params = self.params
+        del params["hand_resolution"]
+        key = None if object_key is None else (object_key, *params.values())
+        return _OBJECT_POINTS.get(key, build)
+
+    def hand_volume(self, grasp: Grasp) -> float:
+        """The hand's volume (union of its links), cubed canonical units.
+
+        `Grasp.canonical_hand_volume`, cached in the process per ``grasp.hand_key``: the
+        union of a real hand's links takes longer than the estimate itself.
+        """
+        return _HAND_VOLUMES.get(
+            getattr(grasp, "hand_key", None), lambda: float(grasp.canonical_hand_volume)
+        )
 
     def volumes(self, grasp: Grasp, poses: np.ndarray) -> np.ndarray:
         """Estimated intersection volume per pose, canonical units cubed.
+
+        Threads: every core, or what `exactgrasp.backends.base.thread_limit` allows; the
+        values do not depend on them.
 
         Parameters
         ----------
@@ -180,3 +219,32 @@ class VoxelBackend(Backend):
         """
         poses = check_poses(poses)
         return estimate_volumes(self.hand_grid(grasp), self.object_point_set(grasp), poses)
+
+    def volumes_with_progress(
+        self, grasp: Grasp, poses: np.ndarray, advance: Callable[[int], Any] | None = None
+    ) -> np.ndarray:
+        """`volumes`, calling ``advance(k)`` as ``k`` more poses are done.
+
+        In `PROGRESS_PIECES` pieces of at least 8,192 poses: a descriptor's poses are one
+        piece, which the estimate counts in a fraction of a second.
+
+        Parameters
+        ----------
+        grasp : Grasp
+        poses : numpy.ndarray, shape (..., 4, 4)
+        advance : callable, optional
+            Called with the number of poses finished since the last call.
+
+        Returns
+        -------
+        numpy.ndarray, shape poses.shape[:-2], float64
+        """
+        poses = check_poses(poses)
+        flat = poses.reshape(-1, 4, 4)
+        step = max(_PROGRESS_POSES, -(-len(flat) // PROGRESS_PIECES))
+        out = np.empty(len(flat))
+        for start in range(0, len(flat), step):
+            out[start : start + step] = self.volumes(grasp, flat[start : start + step])
+            if advance is not None:
+                advance(len(flat[start : start + step]))
+        return out.reshape(poses.shape[:-2])

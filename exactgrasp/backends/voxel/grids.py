@@ -169,7 +169,10 @@ def occupancy_grid(
     """
     triangles = stack_triangles(shells)
     flat = triangles.reshape(-1, 3)
-    origin, spacing, shape = grid_layout(flat.min(axis=0), flat.max(axis=0), resolution, pad, rule)
+    # Column by column: numpy reduces a long (n, 3) array along axis 0 several times slower.
+    lower = np.array([flat[:, axis].min() for axis in range(3)])
+    upper = np.array([flat[:, axis].max() for axis in range(3)])
+    origin, spacing, shape = grid_layout(lower, upper, resolution, pad, rule)
     # Node (i, j, k) sits at integer coordinates in index space, so column positions are exact.
     local = (triangles - origin) / spacing
     values = winding_inside_lattice(local, shape[0], shape[1], shape[2])
@@ -178,7 +181,7 @@ def occupancy_grid(
 
 @dataclass(frozen=True)
 class HandOccupancy:
-    """A hand's occupancy grid with a coarse clearance field for skipping far points.
+    """A hand's occupancy grid with the tables that let whole blocks of points be decided.
 
     Attributes
     ----------
@@ -187,22 +190,24 @@ class HandOccupancy:
     cell_codes : numpy.ndarray, shape (nx - 1, ny - 1, nz - 1), uint8
         For each grid cell, its 8 corner values as bits (bit ``dx + 2 dy + 4 dz`` is corner
         ``(i + dx, j + dy, k + dz)``), so interpolation reads one byte instead of eight.
-    clearance : numpy.ndarray, shape (cx, cy, cz), float64
-        For each coarse cell (`clearance_factor` nodes per axis), the distance in coarse cells
-        to the nearest cell holding an inside node; infinite when the hand has none.
-    clearance_factor : int
-        Grid nodes per coarse cell along each axis.
+    tiles : numpy.ndarray, shape (tx + 1, ty + 1, tz + 1), uint64
+        Two summed tables of tiles (``2**tile_shift`` cells per axis) in one: the low 32 bits
+        of ``tiles[i, j, k]`` count the tiles with indices below ``(i, j, k)`` that hold a
+        cell with an inside corner, the high 32 bits those whose cells all have 8 inside
+        corners (code 255). One read gives both.
+    tile_shift : int
+        Cell ``i`` lies in tile ``i >> tile_shift`` along each axis.
     """
 
     grid: Grid
     cell_codes: np.ndarray
-    clearance: np.ndarray
-    clearance_factor: int
+    tiles: np.ndarray
+    tile_shift: int
 
 
-# Coarse cells per axis at most: the clearance field only has to be finer than the blocks of
-# object points it rejects, and must stay small for fine hand grids.
-_CLEARANCE_CELLS = 128
+# Tiles per axis at most: with finer hand grids several cells share a tile, which keeps the
+# two tables small; the block test stays conservative either way.
+_TABLE_TILES = 128
 
 
 def hand_occupancy(
@@ -223,21 +228,54 @@ def hand_occupancy(
     -------
     HandOccupancy
     """
-    from scipy.ndimage import distance_transform_edt
-
     grid = occupancy_grid(links, resolution, pad=1, rule=rule)
-    factor = max(1, -(-max(grid.shape) // _CLEARANCE_CELLS))
-    cells = [-(-n // factor) for n in grid.shape]
-    padded = np.zeros([c * factor for c in cells], np.uint8)
-    padded[: grid.shape[0], : grid.shape[1], : grid.shape[2]] = grid.values
-    coarse = padded.reshape(cells[0], factor, cells[1], factor, cells[2], factor).max((1, 3, 5))
-    if coarse.any():
-        clearance = distance_transform_edt(coarse == 0).astype(np.float64)
-    else:
-        clearance = np.full(coarse.shape, np.inf)
-    return HandOccupancy(
-        grid=grid, cell_codes=cell_codes(grid.values), clearance=clearance, clearance_factor=factor
-    )
+    codes = cell_codes(grid.values)
+    shift = 0
+    while -(-max(codes.shape) >> shift) > _TABLE_TILES:
+        shift += 1
+    occupied = tile_any(codes != 0, 1 << shift).astype(np.uint64)
+    full = ~tile_any(codes != 255, 1 << shift)
+    # Summing the packed counts sums both halves at once: the low half never carries over.
+    packed = occupied + (full.astype(np.uint64) << np.uint64(32))
+    return HandOccupancy(grid=grid, cell_codes=codes, tiles=summed_table(packed), tile_shift=shift)
+
+
+def tile_any(mask: np.ndarray, tile: int) -> np.ndarray:
+    """Whether each tile of `tile` cells per axis holds a true cell; cells past the end count true.
+
+    Parameters
+    ----------
+    mask : numpy.ndarray, shape (nx, ny, nz), bool
+    tile : int
+
+    Returns
+    -------
+    numpy.ndarray, shape (ceil(nx / tile), ceil(ny / tile), ceil(nz / tile)), bool
+    """
+    if tile == 1:
+        return mask
+    tiles = [-(-n // tile) for n in mask.shape]
+    padded = np.ones([t * tile for t in tiles], bool)
+    padded[: mask.shape[0], : mask.shape[1], : mask.shape[2]] = mask
+    return padded.reshape(tiles[0], tile, tiles[1], tile, tiles[2], tile).any((1, 3, 5))
+
+
+def summed_table(values: np.ndarray) -> np.ndarray:
+    """Summed-volume table of a 3-D array: ``table[i, j, k] = values[:i, :j, :k].sum()``.
+
+    Parameters
+    ----------
+    values : numpy.ndarray, shape (nx, ny, nz), bool or unsigned integers
+
+    Returns
+    -------
+    numpy.ndarray, shape (nx + 1, ny + 1, nz + 1), uint64
+    """
+    table = np.zeros([n + 1 for n in values.shape], np.uint64)
+    table[1:, 1:, 1:] = values
+    for axis in range(3):
+        np.cumsum(table, axis=axis, out=table)
+    return table
 
 
 def cell_codes(values: np.ndarray) -> np.ndarray:

@@ -1,10 +1,12 @@
-"""Blue-noise (Poisson-disk-like) sample points on triangle surfaces.
+"""The object's points for the voxel estimator: interior voxel centres, surface samples, and
+the tree of boxes the kernel walks (`ObjectPoints`, `object_points`, `point_tree`).
 
-The voxel estimator adds points on the object's surface so that thin parts, which may hold no
+The estimator adds points on the object's surface so that thin parts, which may hold no
 interior voxel centre, still register (the paper used MeshLab's Poisson-disk resampling). Here
 candidates are drawn uniformly by area from a seeded generator and accepted greedily, in the
 order drawn, when no accepted point lies closer than the spacing: a dart-throwing Poisson-disk
-set that is deterministic for a fixed seed.
+set that is deterministic for a fixed seed. Imports `exactgrasp.errors` and the voxel room's
+grids.
 """
 
 from __future__ import annotations
@@ -99,39 +101,59 @@ def poisson_disk_surface(triangles: np.ndarray, spacing: float, seed: int = 0) -
         + u[:, None] * (corners[:, 1] - corners[:, 0])
         + v[:, None] * (corners[:, 2] - corners[:, 0])
     )
-    keep = _dart_throw(candidates, float(spacing))
+    keep = dart_throw(candidates, float(spacing))
     return candidates[keep]
 
 
+# Cells of the sampler's grid per candidate at most: the grid is dense, and cells grow beyond
+# one spacing (still correct, only slower per lookup) when a sparse extent would need more.
+_CELLS_PER_CANDIDATE = 8
+
+
 @numba.njit(cache=True)
-def _dart_throw(points, spacing):
-    """Indices of points accepted in order when farther than `spacing` from all accepted."""
+def dart_throw(points, spacing):
+    """Indices of the points accepted in order when not closer than `spacing` to an accepted one.
+
+    Parameters
+    ----------
+    points : numpy.ndarray, shape (n, 3), float64
+        Candidates, in the order they are considered (n >= 1).
+    spacing : float
+        Least distance between accepted points (the points' length units).
+
+    Returns
+    -------
+    numpy.ndarray, shape (k,), int64
+        Increasing indices into `points`.
+    """
     n = points.shape[0]
     lower = np.empty(3)
+    extent = np.empty(3)
     for d in range(3):
         lower[d] = points[:, d].min()
-    # Open-addressing hash of cells of side `spacing`: a conflicting point can only be in the
-    # 27 cells around a candidate's own.
-    size = 1
-    while size < 2 * n:
-        size *= 2
-    keys = np.full((size, 3), -1, np.int64)
-    heads = np.full(size, -1, np.int64)
-    chain = np.full(n, -1, np.int64)
-    cells = np.empty((n, 3), np.int64)
-    for p in range(n):
-        for d in range(3):
-            cells[p, d] = int((points[p, d] - lower[d]) / spacing)
+        extent[d] = points[:, d].max() - lower[d]
+    # A conflicting point lies in one of the 27 cells around a candidate's own when cells are
+    # at least one spacing wide.
+    side = spacing
+    while (extent[0] / side + 3) * (extent[1] / side + 3) * (extent[2] / side + 3) > (
+        _CELLS_PER_CANDIDATE * n + 27
+    ):
+        side *= 1.25
+    # One empty layer of cells all round, so that neighbours need no bounds test.
+    nx, ny, nz = int(extent[0] / side) + 3, int(extent[1] / side) + 3, int(extent[2] / side) + 3
+    heads = np.full(nx * ny * nz, -1, np.int32)
+    chain = np.full(n, -1, np.int32)
     accepted = np.zeros(n, np.bool_)
     limit2 = spacing * spacing
     for p in range(n):
+        cx = int((points[p, 0] - lower[0]) / side) + 1
+        cy = int((points[p, 1] - lower[1]) / side) + 1
+        cz = int((points[p, 2] - lower[2]) / side) + 1
         clash = False
         for dx in range(-1, 2):
             for dy in range(-1, 2):
                 for dz in range(-1, 2):
-                    q = heads[
-                        _find_slot(keys, cells[p, 0] + dx, cells[p, 1] + dy, cells[p, 2] + dz)
-                    ]
+                    q = heads[((cx + dx) * ny + cy + dy) * nz + cz + dz]
                     while q != -1 and not clash:
                         d2 = 0.0
                         for d in range(3):
@@ -143,65 +165,56 @@ def _dart_throw(points, spacing):
         if clash:
             continue
         accepted[p] = True
-        slot = _find_slot(keys, cells[p, 0], cells[p, 1], cells[p, 2])
-        keys[slot, 0], keys[slot, 1], keys[slot, 2] = cells[p, 0], cells[p, 1], cells[p, 2]
-        chain[p] = heads[slot]
-        heads[slot] = p
+        own = (cx * ny + cy) * nz + cz
+        chain[p] = heads[own]
+        heads[own] = p
     return np.nonzero(accepted)[0]
-
-
-@numba.njit(cache=True)
-def _find_slot(keys, cx, cy, cz):
-    """Slot of cell (cx, cy, cz) in the open-addressing table, or the empty slot it would take.
-
-    Empty slots hold -1 keys (cell indices are never negative except for the lookups of
-    neighbours beyond the lower edge, which find an empty slot and hence no points).
-    """
-    mask = keys.shape[0] - 1
-    slot = ((cx * 73856093) ^ (cy * 19349663) ^ (cz * 83492791)) & mask
-    while keys[slot, 0] != -1 and not (
-        keys[slot, 0] == cx and keys[slot, 1] == cy and keys[slot, 2] == cz
-    ):
-        slot = (slot + 1) & mask
-    return slot
 
 
 @dataclass(frozen=True)
 class ObjectPoints:
-    """The points that stand for an object in the voxel estimator.
+    """The points that stand for an object in the voxel estimator, in a tree of boxes.
+
+    The points are grouped by nested cubes (`LEVELS`); a node of the tree holds the points
+    of one cube and of one kind, contiguous in `points`, and its box bounds them. A pose can
+    then skip a node whose box lands where the hand has no inside node, or count it whole
+    where the hand is solid.
 
     Attributes
     ----------
     points : numpy.ndarray, shape (n, 3), float64
-        Interior voxel centres first (`n_interior` of them), then surface samples; each kind
-        ordered block by block.
+        Interior voxel centres first (`n_interior` of them), then surface samples, each kind
+        ordered node by node (length units).
     n_interior : int
         Number of interior voxel centres.
     voxel_volume : float
         ``V_o``, the volume of one object voxel (length units cubed).
     surface_weight : float
         ``w_s``, the volume counted for one surface sample inside the hand.
-    block_starts : numpy.ndarray, shape (b + 1,), int64
-        Block ``i`` holds ``points[block_starts[i]:block_starts[i + 1]]``.
-    block_centres : numpy.ndarray, shape (b, 3)
-        Centre of each block's bounding box.
-    block_radii : numpy.ndarray, shape (b,)
-        Distance from a block's centre to its farthest point.
-    group_starts, group_centres, group_radii
-        The same for groups of neighbouring blocks: group ``g`` holds blocks
-        ``group_starts[g]:group_starts[g + 1]``.
+    node_boxes : numpy.ndarray, shape (6, m), float64
+        Per node, by row: the centre x, y, z of its points' bounding box and its half sides
+        (length units); every point of node ``i`` lies within ``node_boxes[:3, i] +-
+        node_boxes[3:, i]``.
+    node_ranges : numpy.ndarray, shape (m, 4), int64
+        Per node: its points ``points[r0:r1]`` and its children, nodes ``r2:r3`` (none for
+        leaves). Nodes are stored level by level, coarsest first.
+    n_roots : int
+        Nodes ``0:n_roots`` are the coarsest level; every point lies under one of them.
+    first_leaf : int
+        Nodes from ``first_leaf`` on are leaves (the finest level).
+    extent : float
+        Largest absolute coordinate of any point (bounds the rounding of moved points).
     """
 
     points: np.ndarray
     n_interior: int
     voxel_volume: float
     surface_weight: float
-    block_starts: np.ndarray
-    block_centres: np.ndarray
-    block_radii: np.ndarray
-    group_starts: np.ndarray
-    group_centres: np.ndarray
-    group_radii: np.ndarray
+    node_boxes: np.ndarray
+    node_ranges: np.ndarray
+    n_roots: int
+    first_leaf: int
+    extent: float
 
     @property
     def n_surface(self) -> int:
@@ -209,10 +222,11 @@ class ObjectPoints:
         return len(self.points) - self.n_interior
 
 
-# Object voxels per block side, and blocks per group side. Blocks are small so that one near
-# the hand drags in few far points; groups let a pose reject many blocks with one test.
-_BLOCK_VOXELS = 4
-_GROUP_BLOCKS = 4
+#: Sides of the nested cubes that group the points, in object voxels, coarsest first: leaves
+#: of 4 voxels drag few points far from the hand into a test, and the roots let a pose
+#: reject many leaves with one test (finer or more levels measured slower; see
+#: docs/voxel-estimator.md).
+LEVELS = (16, 4)
 
 
 def object_points(
@@ -282,69 +296,76 @@ def object_points(
         weight = voxel_volume / 2.0 / 16.0
     else:
         weight = (area / len(surface)) ** 1.5 / 2.0 if len(surface) else 0.0
-    hierarchy = _hierarchy([interior, surface], grid.origin, _BLOCK_VOXELS * grid.spacing)
     return ObjectPoints(
         n_interior=len(interior),
         voxel_volume=float(voxel_volume),
         surface_weight=float(weight),
-        **hierarchy,
+        **point_tree([interior, surface], grid.origin, grid.spacing),
     )
 
 
-def _spheres(points: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Bounding-box centres and enclosing radii of consecutive runs of points."""
-    sizes = np.diff(starts)
-    lower = np.minimum.reduceat(points, starts[:-1], axis=0)
-    upper = np.maximum.reduceat(points, starts[:-1], axis=0)
-    centres = 0.5 * (lower + upper)
-    offsets = np.linalg.norm(points - np.repeat(centres, sizes, axis=0), axis=1)
-    return np.ascontiguousarray(centres), np.maximum.reduceat(offsets, starts[:-1])
+def _boxes(points: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """Bounding boxes of consecutive runs of points: (6, runs), centres then half sides."""
+    lower = np.minimum.reduceat(points, starts, axis=0)
+    upper = np.maximum.reduceat(points, starts, axis=0)
+    return np.concatenate([0.5 * (lower + upper), 0.5 * (upper - lower)], axis=1).T
 
 
-def _hierarchy(kinds: list[np.ndarray], origin: np.ndarray, side: float) -> dict:
-    """Order points into cubic blocks of `side` and groups of blocks, one kind after another.
+def point_tree(
+    kinds: list[np.ndarray],
+    origin: np.ndarray,
+    voxel: float,
+    levels: tuple[int, ...] | None = None,
+) -> dict:
+    """Order points, one kind after another, into a tree of nested cubes (see `ObjectPoints`).
 
-    Each block and group holds one kind only, so counts per kind need no per-point label.
+    Parameters
+    ----------
+    kinds : list of numpy.ndarray, each (k, 3)
+        Points of each kind; a node never mixes kinds.
+    origin : numpy.ndarray, shape (3,)
+        A corner shared by the cubes of every level.
+    voxel : float
+        Unit of `levels` (length units).
+    levels : tuple of int, optional
+        Cube sides in voxels, coarsest first; default `LEVELS`.
+
+    Returns
+    -------
+    dict
+        The `ObjectPoints` fields ``points``, ``node_boxes``, ``node_ranges``, ``n_roots``,
+        ``first_leaf`` and ``extent``.
     """
-    ordered, block_starts, group_starts = [], [0], [0]
-    for points in kinds:
-        if len(points) == 0:
-            continue
-        cell = np.floor((points - origin) / side).astype(np.int64)
-        group = cell // _GROUP_BLOCKS
-        order = np.lexsort(
-            (cell[:, 2], cell[:, 1], cell[:, 0], group[:, 2], group[:, 1], group[:, 0])
-        )
-        cell, group = cell[order], group[order]
-        new_block = np.r_[True, np.any(cell[1:] != cell[:-1], axis=1)]
-        new_group = np.r_[True, np.any(group[1:] != group[:-1], axis=1)]
-        offset = sum(len(p) for p in ordered)
-        first_blocks = np.flatnonzero(new_block)
-        n_blocks = len(block_starts) - 1
-        block_starts.extend(offset + first_blocks[1:])
-        block_starts.append(offset + len(points))
-        # A group starts at the block that holds the group's first point.
-        group_first_block = np.searchsorted(first_blocks, np.flatnonzero(new_group))
-        group_starts.extend(n_blocks + group_first_block[1:])
-        group_starts.append(n_blocks + len(first_blocks))
-        ordered.append(points[order])
-    points = np.concatenate(ordered) if ordered else np.zeros((0, 3))
-    block_starts = np.asarray(block_starts, np.int64)
-    group_starts = np.asarray(group_starts, np.int64)
-    block_centres, block_radii = (
-        _spheres(points, block_starts) if len(points) else (np.zeros((0, 3)), np.zeros(0))
-    )
-    # Group spheres enclose their points (not their block spheres) to stay tight.
-    group_point_starts = block_starts[group_starts]
-    group_centres, group_radii = (
-        _spheres(points, group_point_starts) if len(points) else (np.zeros((0, 3)), np.zeros(0))
-    )
+    levels = LEVELS if levels is None else levels
+    points = np.concatenate([np.reshape(k, (-1, 3)) for k in kinds]).astype(np.float64)
+    kind = np.repeat(np.arange(len(kinds)), [len(k) for k in kinds])
+    keys = [np.floor((points - origin) / (side * voxel)).astype(np.int64) for side in levels]
+    # lexsort sorts by its last key first: kind, then the coarsest cube, ..., the finest.
+    columns = [key[:, axis] for key in reversed(keys) for axis in (2, 1, 0)]
+    order = np.lexsort((*columns, kind))
+    points, kind = points[order], kind[order]
+    n = len(points)
+    # Where a node of each level starts: a new kind or a new cube of that level or a coarser one.
+    starts, changed = [], kind[1:] != kind[:-1]
+    for key in keys:
+        key = key[order]
+        changed |= np.any(key[1:] != key[:-1], axis=1)
+        starts.append(np.r_[0, 1 + np.flatnonzero(changed)] if n else np.zeros(0, np.int64))
+    first = np.cumsum([0] + [len(s) for s in starts])
+    ranges, boxes = [], []
+    for level, level_starts in enumerate(starts):
+        ends = np.r_[level_starts[1:], n]
+        children = np.zeros((len(level_starts), 2), np.int64)
+        if level + 1 < len(starts):
+            child = first[level + 1] + np.searchsorted(starts[level + 1], np.r_[level_starts, n])
+            children = np.stack([child[:-1], child[1:]], axis=1)
+        ranges.append(np.column_stack([level_starts, ends, children]))
+        boxes.append(_boxes(points, level_starts) if n else np.zeros((6, 0)))
     return {
         "points": np.ascontiguousarray(points),
-        "block_starts": block_starts,
-        "block_centres": block_centres,
-        "block_radii": block_radii,
-        "group_starts": group_starts,
-        "group_centres": group_centres,
-        "group_radii": group_radii,
+        "node_boxes": np.ascontiguousarray(np.concatenate(boxes, axis=1)),
+        "node_ranges": np.ascontiguousarray(np.concatenate(ranges).astype(np.int64)),
+        "n_roots": len(starts[0]),
+        "first_leaf": int(first[-2]),
+        "extent": float(np.abs(points).max()) if n else 0.0,
     }

@@ -1,0 +1,403 @@
+"""Stage "seeds" of the exact kernel (numba): candidate face pairs from which `search` traces
+the curves where the two surfaces cross.
+
+Every such curve is closed. Either it crosses an edge of the object, or it lies in one object
+face; then it is a plane's section of the hand, visits each hand face once (a plane cuts a
+triangle in one segment) and moves from face to face across hand edges: a cycle of the hand's
+dual graph, so it crosses a co-tree edge of the hand (`prepare.cotree_edges`). Two searches
+therefore find a pair on every curve: each object edge near the hand's surface against the
+hand faces listed in the hand-grid cells it passes (`object_edge_seeds`, in the hand's frame),
+and each co-tree edge near the object's surface against the object faces listed in the
+object-grid cells it touches (`cotree_seeds`, in the object's frame). Both are filters whose
+tolerances exceed their rounding (and, in the object's frame, the pose's departure from a
+rotation): they may keep a pair that does not cross, which its evaluation rejects, and never
+drop one that does. See "Method", step 2, in ``docs/exact-backend.md``. Imports numba,
+`cells`, `tables` and `tolerances`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from exactgrasp.backends.exact.cells import surface_cells_in
+from exactgrasp.backends.exact.tables import CHUNK, COTREE_CHUNK
+from exactgrasp.backends.exact.tolerances import FILTER_ERR, GRID_MARGIN, PLANE_TOL, U
+
+#: `near_runs` scans the cells of a run's box only up to this many (long edges make big runs).
+SCAN_CELLS = 27
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def frame_defect(R):
+    """How far R (3, 3) is from a rotation: the largest entry of ``|R^T R - I|``. Moving a
+    point back by ``R^T`` instead of the inverse errs by at most about this times its length."""
+    worst = 0.0
+    for i in range(3):
+        for j in range(3):
+            dot = R[0, i] * R[0, j] + R[1, i] * R[1, j] + R[2, i] * R[2, j]
+            worst = max(worst, abs(dot - (1.0 if i == j else 0.0)))
+    return worst
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def near_runs(runs, R, t, inverse, stretch, scan, grid, rng, parent, per, near):
+    """Which runs of segments may come near a grid's surface (``near``, one per run):
+    the bounding sphere of each run (``runs`` (k, 4): centre, radius), moved by ``x -> R x + t``
+    (or by ``x -> R^T (x - t)`` with ``inverse``) into the grid's frame, its radius times
+    ``stretch`` (at least 1: R may stretch lengths a little) and grown by ``stretch - 1`` times
+    the centre's distance, must hold a surface cell in its bounding box and, with ``scan``,
+    meet the box and the slab of what one of them holds (`tables.CellGrid.bounds`; worth it
+    where runs are small against the cells, and done where the box spans at most `SCAN_CELLS`
+    cells). Where ``parent`` is not empty, run k is tested only
+    if ``parent[k // per]`` (its block is near). ``rng``: scratch (3, 2)."""
+    lo, h, n, table, PT = grid.corner, grid.cell, grid.shape, grid.surface_table, grid.bounds
+    cs = grid.cell_start
+    ih = 1.0 / h
+    margin = GRID_MARGIN * h
+    n1, n2 = n[1], n[2]
+    levels = parent.shape[0] > 0
+    for k in range(runs.shape[0]):
+        if levels and not parent[k // per]:
+            near[k] = False
+            continue
+        c0, c1, c2 = runs[k, 0], runs[k, 1], runs[k, 2]
+        if inverse:
+            c0, c1, c2 = c0 - t[0], c1 - t[1], c2 - t[2]
+        r = runs[k, 3] * stretch + margin + (stretch - 1.0) * (abs(c0) + abs(c1) + abs(c2))
+        ok = True
+        m0 = m1 = m2 = 0.0
+        for d in range(3):
+            if inverse:
+                m = R[0, d] * c0 + R[1, d] * c1 + R[2, d] * c2
+            else:
+                m = R[d, 0] * c0 + R[d, 1] * c1 + R[d, 2] * c2 + t[d]
+            if d == 0:
+                m0 = m
+            elif d == 1:
+                m1 = m
+            else:
+                m2 = m
+            i0 = int(np.floor((m - r - lo[d]) * ih))
+            i1 = int(np.floor((m + r - lo[d]) * ih))
+            if i1 < 0 or i0 >= n[d]:
+                ok = False
+                break
+            rng[d, 0] = max(i0, 0)
+            rng[d, 1] = min(i1, n[d] - 1)
+        ok = ok and surface_cells_in(table, n, rng) > 0
+        cells = (
+            (rng[0, 1] - rng[0, 0] + 1) * (rng[1, 1] - rng[1, 0] + 1) * (rng[2, 1] - rng[2, 0] + 1)
+        )
+        if ok and scan and cells <= SCAN_CELLS:
+            # The sphere against what each surface cell in its box holds.
+            ok = False
+            for i in range(rng[0, 0], rng[0, 1] + 1):
+                for j in range(rng[1, 0], rng[1, 1] + 1):
+                    for kk in range(rng[2, 0], rng[2, 1] + 1):
+                        c = (i * n1 + j) * n2 + kk
+                        if cs[c + 1] == cs[c]:
+                            continue
+                        a = PT[c, 0] * m0 + PT[c, 1] * m1 + PT[c, 2] * m2
+                        ok = ok | (
+                            (a - r <= PT[c, 4] + margin) & (a + r >= PT[c, 3] - margin)
+                            & (PT[c, 5] <= m0 + r) & (PT[c, 8] >= m0 - r)
+                            & (PT[c, 6] <= m1 + r) & (PT[c, 9] >= m1 - r)
+                            & (PT[c, 7] <= m2 + r) & (PT[c, 10] >= m2 - r)
+                        )  # fmt: skip
+        near[k] = ok
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _crossing_point(px, py, pz, qx, qy, qz, dp, dq, eps, ptol, g):
+    """Where segment p q crosses a plane, from its ends' distances dp, dq (opposite signs or
+    within the tolerance ``max(ptol, 2 eps)``, each erring by up to eps), and the tolerance of a
+    test of that point against the face's edges (`prepare.face_sides`): (fixed, x, y, z,
+    tolerance), ``fixed`` False where the distances do not fix the point well enough (the face
+    is then kept). ``g`` bounds every coordinate. Scalars only: a routine taking arrays, even
+    inlined, updates their reference counts."""
+    tol = max(ptol, 2.0 * eps)
+    span = abs(dp) + abs(dq)
+    if span <= 4.0 * tol:
+        return False, 0.0, 0.0, 0.0, 0.0
+    lam = dp / (dp - dq)
+    dx, dy, dz = qx - px, qy - py, qz - pz
+    # The parameter errs by at most 4 eps / span (`pairs.param_err`), the point by that times
+    # the segment's extent plus rounding; the edge distances by about a plane distance's error.
+    xerr = (4.0 * eps / span + 4.0 * U) * max(abs(dx), abs(dy), abs(dz)) + 6.0 * U * g
+    return True, px + lam * dx, py + lam * dy, pz + lam * dz, 4.0 * eps + 2.0 * xerr + ptol
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work, n):
+    """Candidate pairs of the object's edges near the hand's surface (runs ``near``, see
+    `near_runs`): each edge walks the hand-grid cells it passes (a 3-D line walk, moved
+    vertices ``BV``), and the hand faces listed there whose cell-clipped box meets the edge's
+    piece in the cell and that `_keeps` give the pair (hand face, the edge's first face).
+    Appended to ``work.seeds`` from row ``n``; returns the new count, or -1 when the buffer is
+    full. ``gscale`` bounds every coordinate of the pose.
+
+    A crossing point lies in some cell the edge passes, and the face holding it is listed
+    there with its box clipped to that cell (both grown by `GRID_MARGIN`, far above the walk's
+    rounding)."""
+    BE, BET, order = object_mesh.edges, object_mesh.edge_faces, obj.edge_order
+    FL, FE, CBB, PT = hand.filters, hand.filter_err, hand_grid.boxes, hand_grid.bounds
+    lo, h, dims = hand_grid.corner, hand_grid.cell, hand_grid.shape
+    cs, ct, table = hand_grid.cell_start, hand_grid.cell_faces, hand_grid.surface_table
+    seeds, rng, buf = work.seeds, work.cell_range, work.survivors
+    cap = seeds.shape[0]
+    ih = 1.0 / h
+    margin = GRID_MARGIN * h
+    ptol = PLANE_TOL * h
+    n0, n1, n2 = dims[0], dims[1], dims[2]
+    for r in range(near.shape[0]):
+        if not near[r]:
+            continue
+        for kk in range(r * CHUNK, min(r * CHUNK + CHUNK, order.shape[0])):
+            f = order[kk]
+            u, v = BE[f, 0], BE[f, 1]
+            px, py, pz = BV[u, 0], BV[u, 1], BV[u, 2]
+            qx, qy, qz = BV[v, 0], BV[v, 1], BV[v, 2]
+            # The edge's box of cells must hold a surface cell.
+            inside = True
+            for d in range(3):
+                a = px if d == 0 else (py if d == 1 else pz)
+                b = qx if d == 0 else (qy if d == 1 else qz)
+                i0 = int(np.floor((min(a, b) - margin - lo[d]) * ih))
+                i1 = int(np.floor((max(a, b) + margin - lo[d]) * ih))
+                if i1 < 0 or i0 >= dims[d]:
+                    inside = False
+                    break
+                rng[d, 0] = max(i0, 0)
+                rng[d, 1] = min(i1, dims[d] - 1)
+            if not inside or surface_cells_in(table, dims, rng) == 0:
+                continue
+            s1 = BET[f, 0]
+            dx, dy, dz = qx - px, qy - py, qz - pz
+            # The parameter range [l0, l1] of the edge inside the grid's box.
+            l0, l1 = 0.0, 1.0
+            for d in range(3):
+                o = (px if d == 0 else (py if d == 1 else pz)) - lo[d]
+                dd = dx if d == 0 else (dy if d == 1 else dz)
+                size = dims[d] * h
+                if dd == 0.0:
+                    if o < 0.0 or o > size:
+                        l0 = 2.0
+                    continue
+                ta, tb = -o / dd, (size - o) / dd
+                l0 = max(l0, min(ta, tb))
+                l1 = min(l1, max(ta, tb))
+            if l0 > l1:
+                continue
+            # Line walk (Amanatides and Woo): the cells in order, each with its piece
+            # [lam_a, lam_b] of the edge; consecutive pieces share their ends.
+            ix = min(max(int(np.floor((px + l0 * dx - lo[0]) * ih)), 0), n0 - 1)
+            iy = min(max(int(np.floor((py + l0 * dy - lo[1]) * ih)), 0), n1 - 1)
+            iz = min(max(int(np.floor((pz + l0 * dz - lo[2]) * ih)), 0), n2 - 1)
+            sx = 1 if dx > 0 else -1
+            sy = 1 if dy > 0 else -1
+            sz = 1 if dz > 0 else -1
+            tx = (lo[0] + (ix + (1 if dx > 0 else 0)) * h - px) / dx if dx != 0 else np.inf
+            ty = (lo[1] + (iy + (1 if dy > 0 else 0)) * h - py) / dy if dy != 0 else np.inf
+            tz = (lo[2] + (iz + (1 if dz > 0 else 0)) * h - pz) / dz if dz != 0 else np.inf
+            gx = h / abs(dx) if dx != 0 else np.inf
+            gy = h / abs(dy) if dy != 0 else np.inf
+            gz = h / abs(dz) if dz != 0 else np.inf
+            lam_a = l0
+            while True:
+                lam_b = min(tx, ty, tz, l1)
+                c = (ix * n1 + iy) * n2 + iz
+                if cs[c + 1] > cs[c]:
+                    ax_, ay_, az_ = px + lam_a * dx, py + lam_a * dy, pz + lam_a * dz
+                    bx_, by_, bz_ = px + lam_b * dx, py + lam_b * dy, pz + lam_b * dz
+                    x0, x1 = min(ax_, bx_) - margin, max(ax_, bx_) + margin
+                    y0, y1 = min(ay_, by_) - margin, max(ay_, by_) + margin
+                    z0, z1 = min(az_, bz_) - margin, max(az_, bz_) + margin
+                    pa = PT[c, 0] * ax_ + PT[c, 1] * ay_ + PT[c, 2] * az_
+                    pb = PT[c, 0] * bx_ + PT[c, 1] * by_ + PT[c, 2] * bz_
+                    # The piece against what the cell holds of its faces (their clipped
+                    # common box and slab), with one branch.
+                    ok = (
+                        (PT[c, 5] <= x1) & (PT[c, 8] >= x0) & (PT[c, 6] <= y1)
+                        & (PT[c, 9] >= y0) & (PT[c, 7] <= z1) & (PT[c, 10] >= z0)
+                        & (min(pa, pb) <= PT[c, 4] + margin)
+                        & (max(pa, pb) >= PT[c, 3] - margin)
+                    )  # fmt: skip
+                    if ok:
+                        m = 0
+                        for q in range(cs[c], cs[c + 1]):
+                            hit = (
+                                (CBB[q, 0] <= x1) & (CBB[q, 3] >= x0) & (CBB[q, 1] <= y1)
+                                & (CBB[q, 4] >= y0) & (CBB[q, 2] <= z1) & (CBB[q, 5] >= z0)
+                            )  # fmt: skip
+                            buf[m] = q
+                            m += 1 if hit else 0
+                        for j in range(m):
+                            ft = ct[buf[j]]
+                            # Both ends beyond the tolerance on one side: no crossing. Else the
+                            # crossing point must not lie beyond it outside an edge of the face.
+                            dp = FL[ft, 0] * px + FL[ft, 1] * py + FL[ft, 2] * pz - FL[ft, 3]
+                            dq = FL[ft, 0] * qx + FL[ft, 1] * qy + FL[ft, 2] * qz - FL[ft, 3]
+                            eps = (FE[ft] + FILTER_ERR) * gscale
+                            tol = max(ptol, 2.0 * eps)
+                            if ((dp > tol) & (dq > tol)) | ((dp < -tol) & (dq < -tol)):
+                                continue
+                            fixed, x, y, z, st = _crossing_point(
+                                px, py, pz, qx, qy, qz, dp, dq, eps, ptol, gscale
+                            )
+                            if fixed and (
+                                (FL[ft, 4] * x + FL[ft, 5] * y + FL[ft, 6] * z < FL[ft, 7] - st)
+                                | (
+                                    FL[ft, 8] * x + FL[ft, 9] * y + FL[ft, 10] * z
+                                    < FL[ft, 11] - st
+                                )
+                                | (
+                                    FL[ft, 12] * x + FL[ft, 13] * y + FL[ft, 14] * z
+                                    < FL[ft, 15] - st
+                                )
+                            ):
+                                continue
+                            if n > 0 and seeds[n - 1, 0] == ft and seeds[n - 1, 1] == s1:
+                                continue
+                            if n >= cap:
+                                return -1
+                            seeds[n, 0] = ft
+                            seeds[n, 1] = s1
+                            n += 1
+                if lam_b >= l1:
+                    break
+                lam_a = lam_b
+                if tx <= ty and tx <= tz:
+                    ix += sx
+                    tx += gx
+                    if ix < 0 or ix >= n0:
+                        break
+                elif ty <= tz:
+                    iy += sy
+                    ty += gy
+                    if iy < 0 or iy >= n1:
+                        break
+                else:
+                    iz += sz
+                    tz += gz
+                    if iz < 0 or iz >= n2:
+                        break
+    return n
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hcell, work, n):
+    """Candidate pairs of the hand's co-tree edges near the object's surface (runs ``near``,
+    see `near_runs`): each edge, moved into the object's frame by ``x -> R^T (x - t)``, against
+    the object faces listed in the object-grid cells its box touches, those that `_keeps`
+    giving the pair (the edge's first face, object face). Appended to ``work.seeds`` from row
+    ``n``; returns the new count, or -1 when the buffer is full.
+
+    ``ferr`` bounds how far a point moved back differs from where the pose's inverse puts it
+    (rounding and `frame_defect`): it widens the box and every plane tolerance. ``gscale``
+    bounds every coordinate, ``hcell`` is the hand grid's cell (the least plane tolerance is
+    the kernel's, `PLANE_TOL` of it)."""
+    AV, AE, AET, cot = hand_mesh.vertices, hand_mesh.edges, hand_mesh.edge_faces, hand.cotree
+    FL, FE, PT, CBB = obj.filters, obj.filter_err, object_grid.bounds, object_grid.boxes
+    lo, h, dims = object_grid.corner, object_grid.cell, object_grid.shape
+    cs, ct = object_grid.cell_start, object_grid.cell_faces
+    seeds, buf = work.seeds, work.survivors
+    cap = seeds.shape[0]
+    ih = 1.0 / h
+    grow = GRID_MARGIN * h + ferr
+    ptol = PLANE_TOL * max(h, hcell) + 2.0 * ferr
+    n1, n2 = dims[1], dims[2]
+    r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
+    r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
+    r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
+    t0, t1, t2 = t[0], t[1], t[2]
+    for r in range(near.shape[0]):
+        if not near[r]:
+            continue
+        for kk in range(r * COTREE_CHUNK, min(r * COTREE_CHUNK + COTREE_CHUNK, cot.shape[0])):
+            e = cot[kk]
+            u, v = AE[e, 0], AE[e, 1]
+            a0, a1, a2 = AV[u, 0] - t0, AV[u, 1] - t1, AV[u, 2] - t2
+            b0, b1, b2 = AV[v, 0] - t0, AV[v, 1] - t1, AV[v, 2] - t2
+            px = r00 * a0 + r10 * a1 + r20 * a2
+            py = r01 * a0 + r11 * a1 + r21 * a2
+            pz = r02 * a0 + r12 * a1 + r22 * a2
+            qx = r00 * b0 + r10 * b1 + r20 * b2
+            qy = r01 * b0 + r11 * b1 + r21 * b2
+            qz = r02 * b0 + r12 * b1 + r22 * b2
+            t1f = AET[e, 0]
+            # Pieces of at most a cell along every axis, each with its box of cells (tested with
+            # the piece: a cell two pieces share is tested twice): a long edge visits few cells,
+            # not its whole box.
+            pieces = max(1, int(max(abs(qx - px), abs(qy - py), abs(qz - pz)) * ih))
+            for w in range(pieces):
+                la, lb = w / pieces, (w + 1) / pieces
+                ax_, ay_, az_ = px + la * (qx - px), py + la * (qy - py), pz + la * (qz - pz)
+                bx_, by_, bz_ = px + lb * (qx - px), py + lb * (qy - py), pz + lb * (qz - pz)
+                x0, x1 = min(ax_, bx_) - grow, max(ax_, bx_) + grow
+                y0, y1 = min(ay_, by_) - grow, max(ay_, by_) + grow
+                z0, z1 = min(az_, bz_) - grow, max(az_, bz_) + grow
+                i0 = max(int(np.floor((x0 - lo[0]) * ih)), 0)
+                i1 = min(int(np.floor((x1 - lo[0]) * ih)), dims[0] - 1)
+                j0 = max(int(np.floor((y0 - lo[1]) * ih)), 0)
+                j1 = min(int(np.floor((y1 - lo[1]) * ih)), n1 - 1)
+                k0 = max(int(np.floor((z0 - lo[2]) * ih)), 0)
+                k1 = min(int(np.floor((z1 - lo[2]) * ih)), n2 - 1)
+                for i in range(i0, i1 + 1):
+                    for j in range(j0, j1 + 1):
+                        for k in range(k0, k1 + 1):
+                            c = (i * n1 + j) * n2 + k
+                            if cs[c + 1] == cs[c]:
+                                continue
+                            # The piece against what the cell holds (its faces' clipped common
+                            # box and slab), then the listed faces' clipped boxes, each with one
+                            # branch.
+                            pa = PT[c, 0] * ax_ + PT[c, 1] * ay_ + PT[c, 2] * az_
+                            pb = PT[c, 0] * bx_ + PT[c, 1] * by_ + PT[c, 2] * bz_
+                            ok = (
+                                (PT[c, 5] <= x1) & (PT[c, 8] >= x0) & (PT[c, 6] <= y1)
+                                & (PT[c, 9] >= y0) & (PT[c, 7] <= z1) & (PT[c, 10] >= z0)
+                                & (min(pa, pb) <= PT[c, 4] + grow)
+                                & (max(pa, pb) >= PT[c, 3] - grow)
+                            )  # fmt: skip
+                            if not ok:
+                                continue
+                            m = 0
+                            for q in range(cs[c], cs[c + 1]):
+                                hit = (
+                                    (CBB[q, 0] <= x1) & (CBB[q, 3] >= x0) & (CBB[q, 1] <= y1)
+                                    & (CBB[q, 4] >= y0) & (CBB[q, 2] <= z1) & (CBB[q, 5] >= z0)
+                                )  # fmt: skip
+                                buf[m] = ct[q]
+                                m += 1 if hit else 0
+                            for jj in range(m):
+                                s = buf[jj]
+                                dp = FL[s, 0] * px + FL[s, 1] * py + FL[s, 2] * pz - FL[s, 3]
+                                dq = FL[s, 0] * qx + FL[s, 1] * qy + FL[s, 2] * qz - FL[s, 3]
+                                eps = (FE[s] + FILTER_ERR) * gscale + ferr
+                                tol = max(ptol, 2.0 * eps)
+                                if ((dp > tol) & (dq > tol)) | ((dp < -tol) & (dq < -tol)):
+                                    continue
+                                fixed, x, y, z, st = _crossing_point(
+                                    px, py, pz, qx, qy, qz, dp, dq, eps, ptol, gscale
+                                )
+                                if fixed and (
+                                    (FL[s, 4] * x + FL[s, 5] * y + FL[s, 6] * z < FL[s, 7] - st)
+                                    | (
+                                        FL[s, 8] * x + FL[s, 9] * y + FL[s, 10] * z
+                                        < FL[s, 11] - st
+                                    )
+                                    | (
+                                        FL[s, 12] * x + FL[s, 13] * y + FL[s, 14] * z
+                                        < FL[s, 15] - st
+                                    )
+                                ):
+                                    continue
+                                if n > 0 and seeds[n - 1, 0] == t1f and seeds[n - 1, 1] == s:
+                                    continue
+                                if n >= cap:
+                                    return -1
+                                seeds[n, 0] = t1f
+                                seeds[n, 1] = s
+                                n += 1
+    return n

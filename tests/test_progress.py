@@ -1,0 +1,87 @@
+"""Progress bars and the compile notice: one line on a cold numba cache, none on a warm one."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from exactgrasp.progress import COMPILE_SECONDS, progress_bar
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# A user's own compiled function (no notice), then one of the package's smallest kernels.
+SCRIPT = """
+import sys
+sys.path.insert(0, {root!r})
+import numba
+import exactgrasp.geometry.predicates as predicates
+
+@numba.njit
+def users_own(x):
+    return x + 1.0
+
+users_own(1.0)
+print("notice below", file=sys.stderr)
+predicates.orient_bound(1.0)
+predicates.orient_bound(2.0)
+"""
+
+
+def _stderr(cache: Path, **env: str) -> str:
+    """stderr of `SCRIPT` run in a fresh process with ``NUMBA_CACHE_DIR=cache``."""
+    environ = {k: v for k, v in os.environ.items() if k != "EXACTGRASP_NO_PROGRESS"}
+    environ.update(NUMBA_CACHE_DIR=str(cache), **env)
+    out = subprocess.run(
+        [sys.executable, "-c", SCRIPT.format(root=str(ROOT))],
+        env=environ,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=300,
+    )
+    return out.stderr
+
+
+def test_compile_notice_prints_once_on_a_cold_cache_only(tmp_path):
+    line = (
+        f"compiling exactgrasp kernels (geometry), first use only "
+        f"(about {COMPILE_SECONDS['geometry']} s)"
+    )
+    cold = _stderr(tmp_path / "cache")
+    assert cold.splitlines() == ["notice below", line]
+    warm = _stderr(tmp_path / "cache")
+    assert warm.splitlines() == ["notice below"]
+    quiet = _stderr(tmp_path / "other", EXACTGRASP_NO_PROGRESS="1")
+    assert quiet.splitlines() == ["notice below"]
+
+
+class _Clock:
+    def __init__(self):
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def test_bar_rate_leaves_out_the_first_update(tmp_path):
+    with open(tmp_path / "bar.txt", "w") as sink, progress_bar(100, "poses", True) as bar:
+        bar.fp = sink
+        clock = _Clock()
+        bar._time = clock
+        bar.start_t = bar.last_print_t = clock()
+        clock.now += 30.0  # the first results, compiling included
+        bar.update(10)
+        assert bar.n == 10
+        assert not bar.format_dict["rate"]
+        clock.now += 1.0
+        bar.update(10)
+        assert bar.format_dict["rate"] == 10.0
+        assert bar.format_dict["elapsed"] == 31.0
+
+
+def test_disabled_bar_counts_nothing():
+    with progress_bar(5, "poses", False) as bar:
+        bar.update(3)
+        assert bar.disable
