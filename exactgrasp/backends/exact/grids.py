@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.backends.exact.cells import raster_triangles
-from exactgrasp.backends.exact.tables import CellGrid
+from exactgrasp.backends.exact.tables import LIST_GROUP, CellGrid
 from exactgrasp.backends.exact.tolerances import GRID_MARGIN, LENGTH_FLOOR, NORMAL_FLOOR
 from exactgrasp.geometry.winding import winding_number
 
@@ -32,6 +32,15 @@ def vertex_cells(V: np.ndarray, cell: float) -> np.ndarray:
     return (ijk[:, 0] * n[1] + ijk[:, 1]) * n[2] + ijk[:, 2]
 
 
+def morton_codes(q: np.ndarray) -> np.ndarray:
+    """Morton (Z-order) codes of integer points q (k, 3), 10 bits per axis: shape (k,), int64."""
+    code = np.zeros(len(q), np.int64)
+    for bit in range(10):
+        for ax in range(3):
+            code |= ((q[:, ax] >> bit) & 1) << (3 * bit + ax)
+    return code
+
+
 def morton_order(X: np.ndarray) -> np.ndarray:
     """An order of points X (k, 3) along a Morton (Z-order) curve over their bounds, 10 bits per
     axis: consecutive points are mostly close together. Shape (k,), int64."""
@@ -39,11 +48,7 @@ def morton_order(X: np.ndarray) -> np.ndarray:
         return np.zeros(0, np.int64)
     lo, hi = X.min(0), X.max(0)
     q = np.floor((X - lo) / np.maximum(hi - lo, LENGTH_FLOOR) * 1023).astype(np.int64)
-    code = np.zeros(len(X), np.int64)
-    for bit in range(10):
-        for ax in range(3):
-            code |= ((q[:, ax] >> bit) & 1) << (3 * bit + ax)
-    return np.argsort(code, kind="stable").astype(np.int64)
+    return np.argsort(morton_codes(q), kind="stable").astype(np.int64)
 
 
 def cell_order(V: np.ndarray, F: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
@@ -115,13 +120,43 @@ def build_grid(V: np.ndarray, F: np.ndarray, cell: float) -> CellGrid:
     table[1:, 1:, 1:] = surface.reshape(tuple(n)).cumsum(0).cumsum(1).cumsum(2)
     grid = CellGrid(
         lo, float(cell), n, status, cell_start, tris, table.reshape(-1),
+        np.empty((0, 6), np.float32), np.zeros(ncell + 1, np.int64),
         np.empty((0, 6), np.float32), np.empty((0, 11)),
     )  # fmt: skip
     T = V[F]
     N = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
     boxes = np.hstack([T.min(1), T.max(1)])
+    grid = list_groups(grid, cell_boxes(grid, boxes))
+    return grid._replace(bounds=cell_patches(grid, V, F, N, boxes))
+
+
+def list_groups(grid: CellGrid, clipped: np.ndarray) -> CellGrid:
+    """The grid with each cell's list in the order of its boxes' centres along a Morton curve
+    within the cell, cut into groups of `LIST_GROUP` consecutive entries with their common box
+    (`tables.CellGrid.group_start`, ``groups``), and the clipped boxes ``clipped`` (listed, 6;
+    `cell_boxes`) in single precision, rounded outwards (``boxes``)."""
+    cs, h = grid.cell_start, grid.cell
+    counts = np.diff(cs)
+    ncell = len(counts)
+    cell_of = np.repeat(np.arange(ncell), counts)
+    local = ((clipped[:, :3] + clipped[:, 3:]) / 2 - cell_corners(grid)[cell_of]) / h
+    q = np.clip(np.floor(local * 1024), 0, 1023).astype(np.int64)
+    order = np.lexsort((morton_codes(q), cell_of))
+    clipped = clipped[order]
+    ngroups = -(-counts // LIST_GROUP)
+    group_start = np.zeros(ncell + 1, np.int64)
+    np.cumsum(ngroups, out=group_start[1:])
+    gid = group_start[cell_of] + (np.arange(len(cell_of)) - cs[cell_of]) // LIST_GROUP
+    groups = np.empty((int(group_start[-1]), 6))
+    groups[:, :3], groups[:, 3:] = np.inf, -np.inf
+    for k in range(3):
+        np.minimum.at(groups[:, k], gid, clipped[:, k])
+        np.maximum.at(groups[:, 3 + k], gid, clipped[:, 3 + k])
     return grid._replace(
-        boxes=outward_f32(cell_boxes(grid, boxes)), bounds=cell_patches(grid, V, F, N, boxes)
+        cell_faces=np.ascontiguousarray(grid.cell_faces[order]),
+        boxes=outward_f32(clipped),
+        group_start=group_start,
+        groups=outward_f32(groups),
     )
 
 

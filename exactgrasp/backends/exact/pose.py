@@ -209,17 +209,17 @@ def pose_volumes(
         stretch = 1.0 + 4.0 * defect + 16.0 * U
         ferr = 2.0 * (4.0 * defect + 16.0 * U) * gscale
         near_runs(
-            obj.edge_runs, R, t, False, stretch, False, hand_grid, W.cell_range, scratch.none,
-            1, scratch.near,
+            obj.edge_runs, R, t, False, stretch, 0.0, False, hand_grid, W.cell_range,
+            scratch.none, 1, scratch.near,
         )  # fmt: skip
         # The co-tree's runs in two levels: blocks of runs by the surface cells alone, then the
         # runs of near blocks against what those cells hold.
         near_runs(
-            hand.cotree_blocks, R, t, True, stretch, False, object_grid, W.cell_range,
+            hand.cotree_blocks, R, t, True, stretch, ferr, False, object_grid, W.cell_range,
             scratch.none, 1, scratch.near_block,
         )  # fmt: skip
         near_runs(
-            hand.cotree_runs, R, t, True, stretch, True, object_grid, W.cell_range,
+            hand.cotree_runs, R, t, True, stretch, ferr, True, object_grid, W.cell_range,
             scratch.near_block, COTREE_BLOCK, scratch.near_cotree,
         )  # fmt: skip
         while True:

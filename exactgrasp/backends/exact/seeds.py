@@ -13,6 +13,9 @@ tolerances exceed their rounding (and, in the object's frame, the pose's departu
 rotation): they may keep a pair that does not cross, which its evaluation rejects, and never
 drop one that does. See "Method", step 2, in ``docs/exact-backend.md``. Imports numba,
 `cells`, `tables` and `tolerances`.
+
+Long because each search is one kernel whose loops over edges, cells and listed faces share
+their locals: a call per cell would pass arrays and update their reference counts.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from exactgrasp.backends.exact.cells import surface_cells_in
-from exactgrasp.backends.exact.tables import CHUNK, COTREE_CHUNK
+from exactgrasp.backends.exact.tables import CHUNK, COTREE_CHUNK, LIST_GROUP
 from exactgrasp.backends.exact.tolerances import FILTER_ERR, GRID_MARGIN, PLANE_TOL, U
 
 #: `near_runs` scans the cells of a run's box only up to this many (long edges make big runs).
@@ -41,12 +44,13 @@ def frame_defect(R):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def near_runs(runs, R, t, inverse, stretch, scan, grid, rng, parent, per, near):
+def near_runs(runs, R, t, inverse, stretch, grow, scan, grid, rng, parent, per, near):
     """Which runs of segments may come near a grid's surface (``near``, one per run):
     the bounding sphere of each run (``runs`` (k, 4): centre, radius), moved by ``x -> R x + t``
     (or by ``x -> R^T (x - t)`` with ``inverse``) into the grid's frame, its radius times
     ``stretch`` (at least 1: R may stretch lengths a little) and grown by ``stretch - 1`` times
-    the centre's distance, must hold a surface cell in its bounding box and, with ``scan``,
+    the centre's distance and by ``grow``, must hold a surface cell in its bounding box and, with
+    ``scan``,
     meet the box and the slab of what one of them holds (`tables.CellGrid.bounds`; worth it
     where runs are small against the cells, and done where the box spans at most `SCAN_CELLS`
     cells). Where ``parent`` is not empty, run k is tested only
@@ -64,7 +68,7 @@ def near_runs(runs, R, t, inverse, stretch, scan, grid, rng, parent, per, near):
         c0, c1, c2 = runs[k, 0], runs[k, 1], runs[k, 2]
         if inverse:
             c0, c1, c2 = c0 - t[0], c1 - t[1], c2 - t[2]
-        r = runs[k, 3] * stretch + margin + (stretch - 1.0) * (abs(c0) + abs(c1) + abs(c2))
+        r = runs[k, 3] * stretch + margin + grow + (stretch - 1.0) * (abs(c0) + abs(c1) + abs(c2))
         ok = True
         m0 = m1 = m2 = 0.0
         for d in range(3):
@@ -112,7 +116,7 @@ def near_runs(runs, R, t, inverse, stretch, scan, grid, rng, parent, per, near):
 def _crossing_point(px, py, pz, qx, qy, qz, dp, dq, eps, ptol, g):
     """Where segment p q crosses a plane, from its ends' distances dp, dq (opposite signs or
     within the tolerance ``max(ptol, 2 eps)``, each erring by up to eps), and the tolerance of a
-    test of that point against the face's edges (`prepare.face_sides`): (fixed, x, y, z,
+    test of that point against the face's edges (`prepare.face_filters`): (fixed, x, y, z,
     tolerance), ``fixed`` False where the distances do not fix the point well enough (the face
     is then kept). ``g`` bounds every coordinate. Scalars only: a routine taking arrays, even
     inlined, updates their reference counts."""
@@ -133,7 +137,8 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
     """Candidate pairs of the object's edges near the hand's surface (runs ``near``, see
     `near_runs`): each edge walks the hand-grid cells it passes (a 3-D line walk, moved
     vertices ``BV``), and the hand faces listed there whose cell-clipped box meets the edge's
-    piece in the cell and that `_keeps` give the pair (hand face, the edge's first face).
+    piece in the cell and that pass the plane and edge tests give the pair (hand face, the
+    edge's first face).
     Appended to ``work.seeds`` from row ``n``; returns the new count, or -1 when the buffer is
     full. ``gscale`` bounds every coordinate of the pose.
 
@@ -144,6 +149,7 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
     FL, FE, CBB, PT = hand.filters, hand.filter_err, hand_grid.boxes, hand_grid.bounds
     lo, h, dims = hand_grid.corner, hand_grid.cell, hand_grid.shape
     cs, ct, table = hand_grid.cell_start, hand_grid.cell_faces, hand_grid.surface_table
+    gs, GB = hand_grid.group_start, hand_grid.groups
     seeds, rng, buf = work.seeds, work.cell_range, work.survivors
     cap = seeds.shape[0]
     ih = 1.0 / h
@@ -224,15 +230,45 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
                         & (max(pa, pb) >= PT[c, 3] - margin)
                     )  # fmt: skip
                     if ok:
+                        # The list's groups' boxes, then the boxes of the groups that meet the
+                        # piece's box.
                         m = 0
-                        for q in range(cs[c], cs[c + 1]):
-                            hit = (
-                                (CBB[q, 0] <= x1) & (CBB[q, 3] >= x0) & (CBB[q, 1] <= y1)
-                                & (CBB[q, 4] >= y0) & (CBB[q, 2] <= z1) & (CBB[q, 5] >= z0)
-                            )  # fmt: skip
-                            buf[m] = q
-                            m += 1 if hit else 0
+                        for g in range(gs[c], gs[c + 1]):
+                            if not (
+                                (GB[g, 0] <= x1) & (GB[g, 3] >= x0) & (GB[g, 1] <= y1)
+                                & (GB[g, 4] >= y0) & (GB[g, 2] <= z1) & (GB[g, 5] >= z0)
+                            ):  # fmt: skip
+                                continue
+                            q0 = cs[c] + LIST_GROUP * (g - gs[c])
+                            for q in range(q0, min(q0 + LIST_GROUP, cs[c + 1])):
+                                hit = (
+                                    (CBB[q, 0] <= x1) & (CBB[q, 3] >= x0) & (CBB[q, 1] <= y1)
+                                    & (CBB[q, 4] >= y0) & (CBB[q, 2] <= z1) & (CBB[q, 5] >= z0)
+                                )  # fmt: skip
+                                buf[m] = q
+                                m += 1 if hit else 0
+                        # The survivors against the piece itself (not its box): the three axes
+                        # d × e_k separating a segment from a box, with one branch each.
+                        dx_, dy_, dz_ = bx_ - ax_, by_ - ay_, bz_ - az_
+                        adx, ady, adz = abs(dx_), abs(dy_), abs(dz_)
+                        slack = 4.0 * margin * (adx + ady + adz)
+                        kept = 0
                         for j in range(m):
+                            q = buf[j]
+                            hx = 0.5 * (CBB[q, 3] - CBB[q, 0])
+                            hy = 0.5 * (CBB[q, 4] - CBB[q, 1])
+                            hz = 0.5 * (CBB[q, 5] - CBB[q, 2])
+                            cx = 0.5 * (CBB[q, 3] + CBB[q, 0]) - ax_
+                            cy = 0.5 * (CBB[q, 4] + CBB[q, 1]) - ay_
+                            cz = 0.5 * (CBB[q, 5] + CBB[q, 2]) - az_
+                            apart = (
+                                (abs(dz_ * cy - dy_ * cz) > adz * hy + ady * hz + slack)
+                                | (abs(dx_ * cz - dz_ * cx) > adz * hx + adx * hz + slack)
+                                | (abs(dy_ * cx - dx_ * cy) > ady * hx + adx * hy + slack)
+                            )
+                            buf[kept] = q
+                            kept += 0 if apart else 1
+                        for j in range(kept):
                             ft = ct[buf[j]]
                             # Both ends beyond the tolerance on one side: no crossing. Else the
                             # crossing point must not lie beyond it outside an edge of the face.
@@ -301,6 +337,7 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
     FL, FE, PT, CBB = obj.filters, obj.filter_err, object_grid.bounds, object_grid.boxes
     lo, h, dims = object_grid.corner, object_grid.cell, object_grid.shape
     cs, ct = object_grid.cell_start, object_grid.cell_faces
+    gs, GB = object_grid.group_start, object_grid.groups
     seeds, buf = work.seeds, work.survivors
     cap = seeds.shape[0]
     ih = 1.0 / h
@@ -363,13 +400,21 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
                             if not ok:
                                 continue
                             m = 0
-                            for q in range(cs[c], cs[c + 1]):
-                                hit = (
-                                    (CBB[q, 0] <= x1) & (CBB[q, 3] >= x0) & (CBB[q, 1] <= y1)
-                                    & (CBB[q, 4] >= y0) & (CBB[q, 2] <= z1) & (CBB[q, 5] >= z0)
-                                )  # fmt: skip
-                                buf[m] = ct[q]
-                                m += 1 if hit else 0
+                            for g in range(gs[c], gs[c + 1]):
+                                if not (
+                                    (GB[g, 0] <= x1) & (GB[g, 3] >= x0) & (GB[g, 1] <= y1)
+                                    & (GB[g, 4] >= y0) & (GB[g, 2] <= z1) & (GB[g, 5] >= z0)
+                                ):  # fmt: skip
+                                    continue
+                                q0 = cs[c] + LIST_GROUP * (g - gs[c])
+                                for q in range(q0, min(q0 + LIST_GROUP, cs[c + 1])):
+                                    hit = (
+                                        (CBB[q, 0] <= x1) & (CBB[q, 3] >= x0)
+                                        & (CBB[q, 1] <= y1) & (CBB[q, 4] >= y0)
+                                        & (CBB[q, 2] <= z1) & (CBB[q, 5] >= z0)
+                                    )  # fmt: skip
+                                    buf[m] = ct[q]
+                                    m += 1 if hit else 0
                             for jj in range(m):
                                 s = buf[jj]
                                 dp = FL[s, 0] * px + FL[s, 1] * py + FL[s, 2] * pz - FL[s, 3]

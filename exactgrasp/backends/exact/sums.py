@@ -238,7 +238,7 @@ def volume_sum(hand_mesh, hand, object_mesh, obj, scratch, seg, segerr, gscale, 
     scratch : tables.PoseScratch
         The pose's statuses, uniform parts and recorded crossings.
     seg, segerr : float
-        Segment terms and their error bound (`search.object_faces`).
+        Segment terms and their error bound (`search.trace_pairs`).
     gscale, gb : float
         Bounds on every coordinate of the pose, and on the moved object's.
 

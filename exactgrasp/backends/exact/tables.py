@@ -30,6 +30,9 @@ N_STATS = 5
 CHUNK, COTREE_CHUNK = 16, 8
 #: The co-tree's runs are first tested in blocks of this many runs (`HandTables.cotree_blocks`).
 COTREE_BLOCK = 8
+#: A cell's list of faces is tested in groups of this many entries, each with its common box
+#: (`CellGrid.groups`; entries ordered along a Morton curve within the cell).
+LIST_GROUP = 8
 
 
 class MeshTables(NamedTuple):
@@ -72,7 +75,8 @@ class CellGrid(NamedTuple):
     status: np.ndarray
     #: (cells + 1,) int64: CSR start of each cell's list in `cell_faces`.
     cell_start: np.ndarray
-    #: (listed,) int64: the faces touching each cell (closed, grown by `GRID_MARGIN`).
+    #: (listed,) int64: the faces touching each cell (closed, grown by `GRID_MARGIN`), in each
+    #: cell along a Morton curve of their clipped boxes' centres (`grids.list_groups`).
     cell_faces: np.ndarray
     #: ((shape + 1).prod(),) int64: summed-volume table of the surface cells, flat, so that a
     #: box of cells' count takes 8 reads (`cells.surface_cells_in`).
@@ -81,6 +85,12 @@ class CellGrid(NamedTuple):
     #: clipped to its cell (grown by `GRID_MARGIN`, rounded outwards): a crossing in that cell
     #: lies in that box.
     boxes: np.ndarray
+    #: (cells + 1,) int64: CSR start of each cell's groups in `groups`; group k of cell c holds
+    #: its list's entries ``cell_start[c] + LIST_GROUP * (k - group_start[c])`` onwards (at most
+    #: `LIST_GROUP`, up to the cell's end).
+    group_start: np.ndarray
+    #: (groups, 6) float32: the common box of each group of `boxes` (rounded outwards).
+    groups: np.ndarray
     #: (cells, 11) float64: per cell, a unit axis (its faces' area-weighted mean normal), their
     #: extent along it (min, max; widened by `GRID_MARGIN`) and their common bounding box clipped
     #: to the cell (min xyz, max xyz): what the cell holds of the surface lies in that slab and

@@ -29,9 +29,6 @@ GRID_MARGIN = 1e-9
 #: Least tolerance of a floating-point plane test, as a fraction of the hand's cell: far above the
 #: rounding of well-shaped faces; ill-conditioned ones widen it (`PLANE_ERR`).
 PLANE_TOL = 1e-9
-#: Least slack of the column walk's range along the face normal's dominant axis, as a fraction of
-#: the hand's cell (it is also at least four times the face's plane bound).
-WALK_SLACK = 1e-6
 #: A face run's bounding-sphere radius is widened by this fraction of the mesh's coordinate scale
 #: (at least 1) to cover the rounding of the centre and the distances.
 RADIUS_PAD = 1e-12
@@ -54,7 +51,7 @@ PLANE_ERR = 32.0
 #: trusted: the face's plane tests then certify nothing and every decision takes the exact test.
 KAPPA_MAX = 1e-2 / (7.0 * U)
 #: Plane-distance error coefficient (times G) of a face beyond `KAPPA_MAX`: a distance that
-#: large is impossible, so no side, box or walk decision is taken in floating point.
+#: large is impossible, so no side or box decision is taken in floating point.
 PLANE_ERR_NONE = 4.0
 #: Error of a face's ``D = (n·a) n`` against the exact one, times its area / 3 (what the face's
 #: terms can lose, see docs), in units of ``U G |b - a| |c - a|``: at most 6 when conditioned
