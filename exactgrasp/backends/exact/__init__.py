@@ -2,8 +2,9 @@
 
 Modules by stage: `reference` (the plain boolean, the agreement rule), `intersector` (the
 array-level core), `backend` (the `Backend`), `tables` (the kernel's named tables), `grids` and
-`prepare` (built once per grasp), `pose` (the per-pose driver) with its stages `search`,
-`pairs`, `classify` and `sums`, on `cells` and `predicates`; every tolerance in `tolerances`.
+`prepare` (built once per grasp), `pose` (the per-pose driver) with its stages `seeds`,
+`search`, `pairs`, `classify` and `sums`, on `cells` and `predicates`; every tolerance in
+`tolerances`.
 """
 
 from exactgrasp.backends.exact.backend import ExactBackend

@@ -146,12 +146,13 @@ def list_groups(grid: CellGrid, clipped: np.ndarray) -> CellGrid:
     ngroups = -(-counts // LIST_GROUP)
     group_start = np.zeros(ncell + 1, np.int64)
     np.cumsum(ngroups, out=group_start[1:])
-    gid = group_start[cell_of] + (np.arange(len(cell_of)) - cs[cell_of]) // LIST_GROUP
-    groups = np.empty((int(group_start[-1]), 6))
-    groups[:, :3], groups[:, 3:] = np.inf, -np.inf
-    for k in range(3):
-        np.minimum.at(groups[:, k], gid, clipped[:, k])
-        np.maximum.at(groups[:, 3 + k], gid, clipped[:, 3 + k])
+    # Each group's first entry: its cell's start plus LIST_GROUP per group before it.
+    gcell = np.repeat(np.arange(ncell), ngroups)
+    first = cs[gcell] + LIST_GROUP * (np.arange(len(gcell)) - group_start[gcell])
+    groups = np.empty((len(first), 6))
+    if len(first):
+        groups[:, :3] = np.minimum.reduceat(clipped[:, :3], first, axis=0)
+        groups[:, 3:] = np.maximum.reduceat(clipped[:, 3:], first, axis=0)
     return grid._replace(
         cell_faces=np.ascontiguousarray(grid.cell_faces[order]),
         boxes=outward_f32(clipped),
@@ -165,8 +166,8 @@ def outward_f32(boxes: np.ndarray) -> np.ndarray:
     every box still holds the one it came from."""
     out = boxes.astype(np.float32)
     low, high = out[:, :3], out[:, 3:]
-    low[low > boxes[:, :3]] = np.nextafter(low, np.float32(-np.inf))[low > boxes[:, :3]]
-    high[high < boxes[:, 3:]] = np.nextafter(high, np.float32(np.inf))[high < boxes[:, 3:]]
+    out[:, :3] = np.where(low > boxes[:, :3], np.nextafter(low, np.float32(-np.inf)), low)
+    out[:, 3:] = np.where(high < boxes[:, 3:], np.nextafter(high, np.float32(np.inf)), high)
     return np.ascontiguousarray(out)
 
 
@@ -228,6 +229,17 @@ def cell_boxes(grid: CellGrid, ABB: np.ndarray) -> np.ndarray:
     return out
 
 
+def _per_cell(values: np.ndarray, cs: np.ndarray, op, empty: float) -> np.ndarray:
+    """``op.reduceat`` of the rows of values (listed, ...) over each cell's range of its list
+    (``cs``: `tables.CellGrid.cell_start`), ``empty`` where a cell lists nothing."""
+    ncell = len(cs) - 1
+    out = np.full((ncell, *values.shape[1:]), empty)
+    full = np.flatnonzero(cs[1:] > cs[:-1])
+    if len(full):
+        out[full] = op.reduceat(values, cs[full], axis=0)
+    return out
+
+
 def cell_patches(grid: CellGrid, AV, AF, AN, ABB) -> np.ndarray:
     """Per grid cell, bounds of the faces it lists: `tables.CellGrid.bounds`, shape (cells, 11),
     from the mesh (AV, AF), its normals AN and face boxes ABB (only the grid's frame and lists
@@ -235,8 +247,7 @@ def cell_patches(grid: CellGrid, AV, AF, AN, ABB) -> np.ndarray:
     h, cs, ct = grid.cell, grid.cell_start, grid.cell_faces
     ncell = len(cs) - 1
     cell = np.repeat(np.arange(ncell), np.diff(cs))
-    axis = np.zeros((ncell, 3))
-    np.add.at(axis, cell, AN[ct])
+    axis = _per_cell(AN[ct], cs, np.add, 0.0)
     norm = np.linalg.norm(axis, axis=1)
     good = norm > NORMAL_FLOOR * max(1.0, norm.max())
     axis[good] /= norm[good, None]
@@ -244,15 +255,10 @@ def cell_patches(grid: CellGrid, AV, AF, AN, ABB) -> np.ndarray:
     proj = np.einsum("qkj,qj->qk", AV[AF[ct]], axis[cell])
     out = np.zeros((ncell, 11))
     out[:, :3] = axis
-    out[:, 3], out[:, 4] = np.inf, -np.inf
-    np.minimum.at(out[:, 3], cell, proj.min(1))
-    np.maximum.at(out[:, 4], cell, proj.max(1))
-    out[:, 3] -= GRID_MARGIN * h
-    out[:, 4] += GRID_MARGIN * h
-    out[:, 5:8], out[:, 8:] = np.inf, -np.inf
-    for k in range(3):
-        np.minimum.at(out[:, 5 + k], cell, ABB[ct, k])
-        np.maximum.at(out[:, 8 + k], cell, ABB[ct, 3 + k])
+    out[:, 3] = _per_cell(proj.min(1), cs, np.minimum, np.inf) - GRID_MARGIN * h
+    out[:, 4] = _per_cell(proj.max(1), cs, np.maximum, -np.inf) + GRID_MARGIN * h
+    out[:, 5:8] = _per_cell(ABB[ct, :3], cs, np.minimum, np.inf)
+    out[:, 8:] = _per_cell(ABB[ct, 3:], cs, np.maximum, -np.inf)
     # Clipped to the cell (grown by the kernel's margin): the part of the faces that the
     # cell holds lies in this box, which the search tests each object face against.
     clip_to_cells(out[:, 5:], cell_corners(grid), h)
