@@ -435,6 +435,46 @@ def test_cells_classified_whole_match_analytic_overlap():
     assert st["parts_culled"] > 0 and st["poses_boolean"] == 0
 
 
+def test_cotree_leaves_a_spanning_forest_and_parts_are_connected():
+    """The seeds rest on two tables: without its co-tree edges the hand's dual graph (faces
+    joined across edges) is a spanning forest, so every cycle of faces crosses a co-tree edge;
+    and every part's vertices are joined by the part's own edges."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from exactgrasp.backends.exact.prepare import cotree_edges
+
+    hand = fine_box([-1, -1, -1], [1, 1, 1], 2)
+    ring = box([3, -1, -1], [5, 1, 1])
+    ex = ExactIntersector([hand, ring], [box([0, 0, 0], [2, 2, 2])], broadphase=None)
+    m, t = ex.hand_mesh, ex.hand_tables
+    cot = cotree_edges(m)
+    np.testing.assert_array_equal(np.sort(cot), np.sort(t.cotree))
+    F, E, ET = len(m.faces), len(m.edges), m.edge_faces
+    tree = np.setdiff1d(np.arange(E), cot)
+    shells, _ = connected_components(
+        coo_matrix((np.ones(E), (ET[:, 0], ET[:, 1])), shape=(F, F)), directed=False
+    )
+    # A forest spanning every shell: one edge fewer than faces per shell, and connected.
+    assert len(tree) == F - shells
+    parts, _ = connected_components(
+        coo_matrix((np.ones(len(tree)), (ET[tree, 0], ET[tree, 1])), shape=(F, F)),
+        directed=False,
+    )
+    assert parts == shells
+    reps, epart = t.parts, t.edge_part
+    for k in range(len(reps) - 1):
+        own = np.flatnonzero(epart == k)
+        n = reps[k + 1, 1] - reps[k, 1]
+        if n > 1:
+            local = m.edges[own] - reps[k, 1]
+            count, _ = connected_components(
+                coo_matrix((np.ones(len(own)), (local[:, 0], local[:, 1])), shape=(n, n)),
+                directed=False,
+            )
+            assert count == 1
+
+
 def test_hand_parts_tables_are_consistent():
     """Vertices numbered cell by cell; each part's summed edge weight and the split of every
     vertex's adjacency (edges to other parts first) as the kernel assumes."""

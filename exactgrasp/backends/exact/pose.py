@@ -179,8 +179,11 @@ def pose_volumes(
     codes : numpy.ndarray, shape (k,), int64
         `OK`, `DEGENERATE` or `OVERFLOW` (the caller recomputes those with a boolean).
     stats : numpy.ndarray, shape (k, N_STATS), int64
-        Pairs tried, crossing pairs, and the hand's parts touched / untouched inside /
-        untouched outside (columns ``STAT_*``).
+        Face pairs evaluated, crossing pairs, and the hand's parts classified vertex by vertex
+        / whole inside / whole outside (columns ``STAT_*``).
+
+    A pose whose pair table or seed buffer fills up (`GROW`) is computed again with both
+    doubled: results do not depend on their sizes.
     """
     AV = hand_mesh.vertices
     BV0, BF = object_mesh.vertices, object_mesh.faces
@@ -256,7 +259,7 @@ def pose_volumes(
                 scratch.point, scratch.hand_stamp, scratch.object_stamp, scratch.near,
                 scratch.near_cotree, scratch.near_block, scratch.none, W,
             )  # fmt: skip
-        # After the search: the parts whose own edges nothing crosses are classified whole.
+        # After the pairs: the parts whose own edges nothing crosses are classified whole.
         code, token = classify_vertices(
             R, t, hand_mesh, hand, object_mesh, obj, hand_grid, object_grid, scratch, code, token
         )
