@@ -9,12 +9,12 @@ numba and `predicates` only.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from exactgrasp.backends.exact.predicates import tri_box
+from exactgrasp.compiling import inner, kernel
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def cell_index(x, y, z, l0, l1, l2, ih, n0, n1, n2):
     """Flat index of the grid cell holding (x, y, z), or -1 outside the grid (lower corner
     (l0, l1, l2), inverse cell edge ih, n* cells per axis). Scalars only, so that per-vertex
@@ -29,7 +29,7 @@ def cell_index(x, y, z, l0, l1, l2, ih, n0, n1, n2):
     return (i * n1 + j) * n2 + k
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def point_status(x, lo, h, n, status):
     """Inside (1) / outside (0) from the grid's cell statuses; -1 when x is in a surface cell.
 
@@ -38,7 +38,7 @@ def point_status(x, lo, h, n, status):
     return 0 if c < 0 else status[c]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def tri_cell_range(V, F, f, lo, h, n, margin, rng):
     """Grid-index range of triangle f's bounding box (clipped); False when outside the grid.
     (Products with 1 / h, not quotients: the margin dwarfs the difference in rounding.)"""
@@ -55,11 +55,11 @@ def tri_cell_range(V, F, f, lo, h, n, margin, rng):
     return True
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def raster_triangles(V, F, lo, h, n, margin):
     """(cell, triangle) pairs of every triangle touching a grid cell (closed, grown by margin).
 
-    Returns flat cell indices and triangle indices, sorted by cell.
+    Returns flat cell indices and triangle indices, in triangle order (the caller sorts).
     """
     cells = []
     tris = []
@@ -77,13 +77,10 @@ def raster_triangles(V, F, lo, h, n, margin):
                     if tri_box(cx, cy, cz, hh, V[F[f, 0]], V[F[f, 1]], V[F[f, 2]]):
                         cells.append((i * n[1] + j) * n[2] + k)
                         tris.append(f)
-    c = np.array(cells, np.int64)
-    t = np.array(tris, np.int64)
-    order = np.argsort(c, kind="mergesort")
-    return c[order], t[order]
+    return np.array(cells, np.int64), np.array(tris, np.int64)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def surface_cells_in(table, n, rng):
     """Number of surface cells in the box of cells ``rng`` (3, 2) (inclusive index ranges),
     from the grid's summed-volume table (`tables.CellGrid.surface_table`)."""

@@ -9,16 +9,16 @@ numba, `cells`, `predicates`, `tables`, `tolerances` and `geometry.predicates`.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from exactgrasp.backends.exact.cells import cell_index, point_status
 from exactgrasp.backends.exact.predicates import edge_triangle
 from exactgrasp.backends.exact.tables import DEGENERATE, OK
 from exactgrasp.backends.exact.tolerances import ROUNDING_PAD
+from exactgrasp.compiling import inner, kernel
 from exactgrasp.geometry.predicates import orient, orient_bound
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def spread(S, adj_start, adj_vert, adj_edge, cnt, queue, tail):
     """Breadth-first from the ``tail`` vertices in ``queue``: every unknown (-1) neighbour
     takes the status of the vertex it is reached from, flipped by the parity of the crossings
@@ -35,7 +35,7 @@ def spread(S, adj_start, adj_vert, adj_edge, cnt, queue, tail):
                 tail += 1
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def next_unknown(S, start, reps, uniform):
     """The first vertex at or after ``start`` whose status is unknown (-1), or -1. Parts
     classified whole (``uniform``, see `hand_statuses`) are known and skipped."""
@@ -48,7 +48,7 @@ def next_unknown(S, start, reps, uniform):
     return -1
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def resolve(S, adj_start, adj_vert, adj_edge, cnt, queue, reps, uniform):
     """Give every vertex of unknown status (-1) the status of a neighbour, flipped by the
     parity of the crossings on the edge between them. Returns the first vertex still unknown
@@ -72,7 +72,7 @@ def resolve(S, adj_start, adj_vert, adj_edge, cnt, queue, reps, uniform):
     return next_unknown(S, 0, reps, uniform)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def object_statuses(S, V, grid):
     """Status of every vertex of V in the other mesh's grid (1 inside, 0 outside, -1 in a cell
     the other surface touches), V being in that mesh's frame. One loop with scalar loads: a
@@ -85,7 +85,7 @@ def object_statuses(S, V, grid):
         S[i] = 0 if c < 0 else status[c]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def hand_statuses(S, V, R, t, grid, reps, crossed, whole, uniform):
     """`object_statuses` of the hand's vertices in the object's grid, part by part (``reps``,
     `tables.HandTables.parts`), the vertices moved by ``x -> R^T (x - t)``.
@@ -121,7 +121,7 @@ def hand_statuses(S, V, R, t, grid, reps, crossed, whole, uniform):
                 S[i] = st
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def ray_status(x, V, F, grid, fstamp, token):
     """Inside (1) or outside (0) of point x against a closed mesh with its cell grid, exactly.
 
@@ -193,7 +193,7 @@ def ray_status(x, V, F, grid, fstamp, token):
     return known ^ parity
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def _shell_straddles(V, comp, seen, R, t, inverse, grid):
     """Whether some shell of mesh V (vertex -> shell `comp`) has a vertex in a cell wholly
     inside the other mesh and one in a cell wholly outside it; the vertices move by x -> R x + t
@@ -220,7 +220,7 @@ def _shell_straddles(V, comp, seen, R, t, inverse, grid):
     return False
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def surfaces_cross(poses, AV, acomp, ancomp, agrid, BV0, bcomp, bncomp, bgrid):
     """Per pose, whether the moved object's surface certainly crosses the hand's: a connected
     shell of either mesh has one vertex in a cell wholly inside the other mesh and another in
@@ -238,7 +238,7 @@ def surfaces_cross(poses, AV, acomp, ancomp, agrid, BV0, bcomp, bncomp, bgrid):
     return out
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def classify_vertices(
     R, t, hand_mesh, hand, object_mesh, obj, hand_grid, object_grid, scratch, code, token
 ):  # fmt: skip

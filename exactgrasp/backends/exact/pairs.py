@@ -8,15 +8,14 @@ terms' formulas. Imports numba, `geometry.predicates`, `predicates`, `tables` an
 
 from __future__ import annotations
 
-from numba import njit
-
 from exactgrasp.backends.exact.predicates import CROSS, NO, edge_triangle
 from exactgrasp.backends.exact.tables import DEGENERATE, OVERFLOW
 from exactgrasp.backends.exact.tolerances import PARAM_ROUNDING, ROUNDING_PAD, TERM_ERR, U
+from exactgrasp.compiling import inner
 from exactgrasp.geometry.predicates import orient, orient_bound
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def _side(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
     """Side of d against the plane of abc, positive on the side ``(b - a) × (c - a)`` points
     to (as the floating-point plane tests; `orient` is positive on the other side): (certain
@@ -25,7 +24,7 @@ def _side(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz, bound):
     return (0 if not ok else (-1 if d > 0 else 1)), -d
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def _edges_through(
     f, F, TE, TO, V, row, ax, ay, az, bx, by, bz, cx, cy, cz,
     cnt, rec_e, rec_l, rec_d, nrec, P, npt, sg, dt, bound, g,
@@ -80,7 +79,7 @@ def _edges_through(
     return npt, NO
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def pair(
     t, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, BD, acnt, bcnt,
     arec, brec, nrec, P, sg, dt, sided, g,
@@ -150,7 +149,7 @@ def pair(
     return term, err, CROSS
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def crossing_starts(row, s0, s1):
     """Whether the crossing on the edge from corner sign s0 to corner sign s1 (certain,
     opposite) of a face, corners in the face's own order, is where the common segment of the
@@ -164,7 +163,7 @@ def crossing_starts(row, s0, s1):
     return s0 > 0 > s1
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def param_err(du, dv, err):
     """Bound on the error of the crossing parameter ``du / (du - dv)`` of an edge whose ends
     have values du, dv (opposite, certain signs) erring by up to
@@ -174,14 +173,14 @@ def param_err(du, dv, err):
     return (4.0 * err / span if span >= 4.0 * err else 1.0) + PARAM_ROUNDING
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def point_err(dl, span, g):
     """Bound on each coordinate's error of ``x_u + lam (x_v - x_u)`` with lam erring by dl,
     ``span`` the largest coordinate difference of the edge, g bounding every coordinate."""
     return dl * span + 6.0 * U * g
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def segment_term(p0, p1, p2, q0, q1, q2, ep, eq, a0, a1, a2, b0, b1, b2):
     """Term of the segment p → q (already directed along ``n_t × n_s``, see
     `crossing_starts`) where face t (``D_t = a``) meets face s (``D_s = b``):
@@ -197,13 +196,13 @@ def segment_term(p0, p1, p2, q0, q1, q2, ep, eq, a0, a1, a2, b0, b1, b2):
     return term, TERM_ERR * U * dn * pn * qn + moved
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def _pick(x0, x1, x2, k):
     """The k-th of three scalars (no array view in the hot loop)."""
     return x0 if k == 0 else (x1 if k == 1 else x2)
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def corner_crossing(
     row, k0, i0, i1, i2, x0, y0, z0, x1, y1, z1, x2, y2, z2, d0, d1, d2, err, g
 ):  # fmt: skip

@@ -10,7 +10,6 @@ The tables are `tables`' named tuples. Imports numba, `classify`, `search`, `see
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from exactgrasp.backends.exact.classify import classify_vertices
 from exactgrasp.backends.exact.search import trace_pairs
@@ -35,13 +34,14 @@ from exactgrasp.backends.exact.tables import (
     Workspace,
 )
 from exactgrasp.backends.exact.tolerances import LENGTH_FLOOR, ROUNDING_PAD, U
+from exactgrasp.compiling import inner, kernel
 
 #: First size of the pair table (a power of two) and of the seed buffer; both double when a
 #: pose needs more (the pose is then computed again).
 PAIR_TABLE, SEED_ROWS = 2**14, 2**13
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def move_object(R, t, BV0, BF, tiny, bmax, BV, BD, BN):
     """Stage "move" of a pose (``docs/exact-backend.md``, "Method", step 1): the object's
     vertices ``BV0`` (its own frame) moved by ``x -> R x + t`` into ``BV``, and its faces'
@@ -62,7 +62,7 @@ def move_object(R, t, BV0, BF, tiny, bmax, BV, BD, BN):
     return bmax + np.sqrt(t0 * t0 + t1 * t1 + t2 * t2) * ROUNDING_PAD
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def _clear_records(W):
     """Clear the crossing counters where the last pose set them, and the records (the pair
     table is stamped per pose, so it needs no pass)."""
@@ -74,7 +74,7 @@ def _clear_records(W):
     nrec[:] = 0
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def _cell_stats(stats, ip, parts, uniform, AS):
     """The hand parts of pose ``ip`` classified vertex by vertex, and of the others (classified
     whole, ``uniform``) those inside and outside (from their first vertex's status ``AS``)."""
@@ -91,7 +91,7 @@ def _cell_stats(stats, ip, parts, uniform, AS):
     stats[ip, STAT_CELLS_OUTSIDE] = nparts - touched - inside
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows):
     """The search's scratch arrays (`tables.Workspace`): ``cap`` crossings per mesh, a pair
     table of ``pairs`` slots (a power of two), ``rows`` seed rows."""
@@ -115,7 +115,7 @@ def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs,
     )
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, work):
     """The per-pose scratch arrays (`tables.PoseScratch`), ``cap`` crossings per mesh, around
     the search's ``work``."""
@@ -141,7 +141,7 @@ def _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, wor
     )
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def _vertex_bound(V):
     """A bound on every vertex's length ``|x|`` of V (n, 3), widened by `ROUNDING_PAD`."""
     vmax = 0.0
@@ -150,7 +150,7 @@ def _vertex_bound(V):
     return np.sqrt(vmax) * ROUNDING_PAD
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def pose_volumes(
     poses, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap,
     out, bounds, codes, stats,

@@ -7,9 +7,8 @@ numba, `geometry.predicates` and `tables` (the result codes) only.
 
 from __future__ import annotations
 
-from numba import njit
-
 from exactgrasp.backends.exact.tables import DEGENERATE
+from exactgrasp.compiling import inner, kernel
 from exactgrasp.geometry.predicates import orient
 
 #: Outcomes of `edge_triangle` (and of a face pair, see `pairs.pair`): no crossing, a crossing,
@@ -18,13 +17,13 @@ from exactgrasp.geometry.predicates import orient
 NO, CROSS = 0, 1
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def sign(x):
     """+1 for a positive x, else -1 (for distances already known to be non-zero)."""
     return 1 if x > 0 else -1
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def edge_triangle(
     px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz, sp, s1, sq, s2, bound
 ):
@@ -47,7 +46,7 @@ def edge_triangle(
     return CROSS, s1 / (s1 - s2)
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def _sep(ax, ay, az, x0, y0, z0, x1, y1, z1, x2, y2, z2, hx, hy, hz):
     """Is axis (ax, ay, az) separating a triangle and the box [-h*, h*] (half sizes h*)?"""
     p0 = ax * x0 + ay * y0 + az * z0
@@ -57,7 +56,7 @@ def _sep(ax, ay, az, x0, y0, z0, x1, y1, z1, x2, y2, z2, hx, hy, hz):
     return (min(p0, p1, p2) > r) | (max(p0, p1, p2) < -r)
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def _sep2(a, b, p, q, r, s, ha, hb):
     """Is the axis with components (a, b) in two coordinates (0 in the third) separating a
     triangle whose corners project to a p + b q and a r + b s, and a box of half sizes
@@ -68,7 +67,7 @@ def _sep2(a, b, p, q, r, s, ha, hb):
     return (min(p0, p1) > rad) | (max(p0, p1) < -rad)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def tri_box(cx, cy, cz, hh, a, b, c):
     """Separating-axis test: does triangle abc touch the cube of half-size hh at (cx, cy, cz)?"""
     return tri_box_xyz(
@@ -76,7 +75,7 @@ def tri_box(cx, cy, cz, hh, a, b, c):
     )
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@kernel(nogil=True, error_model="numpy")
 def tri_box_xyz(cx, cy, cz, hx, hy, hz, ax, ay, az, bx, by, bz, qx, qy, qz):
     """Does the triangle with corners (ax, ay, az), (bx, by, bz), (qx, qy, qz) touch the box of
     centre (cx, cy, cz) and half sizes hx, hy, hz? Scalars only (no array views in hot loops).

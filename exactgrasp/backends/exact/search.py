@@ -11,7 +11,6 @@ would pass them (and update array reference counts) in the hottest loop.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from exactgrasp.backends.exact.pairs import corner_crossing, pair, segment_term
 from exactgrasp.backends.exact.predicates import CROSS, sign
@@ -27,6 +26,7 @@ from exactgrasp.backends.exact.tolerances import (
     PLANE_TOL,
     U,
 )
+from exactgrasp.compiling import inner
 
 #: Multiplier of the pair table's hash (Fibonacci hashing; int64 products wrap).
 HASH_MULTIPLIER = -7046029254386353131
@@ -34,7 +34,7 @@ HASH_MULTIPLIER = -7046029254386353131
 HASH_SHIFT = 24
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def plane_err_coef(kappa):
     """Bound on the error of a plane distance with a face's unit normal, divided by the
     coordinate bound G (`PLANE_ERR`); `PLANE_ERR_NONE` beyond `KAPPA_MAX` (or no normal)."""
@@ -43,7 +43,7 @@ def plane_err_coef(kappa):
     return PLANE_ERR_NONE
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def _lone(d0, d1, d2):
     """Index of the vertex alone on its side of a plane (signed distances d*, none zero,
     not all of one sign): the two edges from it are the ones that cross the plane."""
@@ -54,7 +54,7 @@ def _lone(d0, d1, d2):
     return 0
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def _on_line(x0, x1, x2, d0, d1, d2, k, span, err, rho):
     """Where a triangle's two crossing edges meet a plane, projected on a direction (that of
     the plane's line with another plane, as computed): (a, b, error bound), a on the edge from
@@ -77,7 +77,7 @@ def _on_line(x0, x1, x2, d0, d1, d2, k, span, err, rho):
     return a, b, span * (4.0 * err * max(ri, rj) + PARAM_ROUNDING) + rho
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def trace_pairs(
     hand_mesh, hand, object_mesh, obj, BV, BD, BN, W, nseeds, gscale, gb, hcell, token
 ):  # fmt: skip

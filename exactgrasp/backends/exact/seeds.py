@@ -21,17 +21,17 @@ their locals: a call per cell would pass arrays and update their reference count
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from exactgrasp.backends.exact.cells import surface_cells_in
 from exactgrasp.backends.exact.tables import CHUNK, COTREE_CHUNK, LIST_GROUP
 from exactgrasp.backends.exact.tolerances import FILTER_ERR, GRID_MARGIN, PLANE_TOL, U
+from exactgrasp.compiling import inner
 
 #: `near_runs` scans the cells of a run's box only up to this many (long edges make big runs).
 SCAN_CELLS = 27
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def frame_defect(R):
     """How far R (3, 3) is from a rotation: the largest entry of ``|R^T R - I|``. Moving a
     point back by ``R^T`` instead of the inverse errs by at most about this times its length."""
@@ -43,7 +43,7 @@ def frame_defect(R):
     return worst
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def near_runs(runs, R, t, inverse, stretch, grow, scan, grid, rng, parent, per, near):
     """Which runs of segments may come near a grid's surface (``near``, one per run):
     the bounding sphere of each run (``runs`` (k, 4): centre, radius), moved by ``x -> R x + t``
@@ -112,7 +112,7 @@ def near_runs(runs, R, t, inverse, stretch, grow, scan, grid, rng, parent, per, 
         near[k] = ok
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def _crossing_point(px, py, pz, qx, qy, qz, dp, dq, eps, ptol, g):
     """Where segment p q crosses a plane, from its ends' distances dp, dq (opposite signs or
     within the tolerance ``max(ptol, 2 eps)``, each erring by up to eps), and the tolerance of a
@@ -132,7 +132,7 @@ def _crossing_point(px, py, pz, qx, qy, qz, dp, dq, eps, ptol, g):
     return True, px + lam * dx, py + lam * dy, pz + lam * dz, 4.0 * eps + 2.0 * xerr + ptol
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work, n):
     """Candidate pairs of the object's edges near the hand's surface (runs ``near``, see
     `near_runs`): each edge walks the hand-grid cells it passes (a 3-D line walk, moved
@@ -321,7 +321,7 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
     return n
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hcell, work, n):
     """Candidate pairs of the hand's co-tree edges near the object's surface (runs ``near``,
     see `near_runs`): each edge, moved into the object's frame by ``x -> R^T (x - t)``, against

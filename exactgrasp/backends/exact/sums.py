@@ -23,13 +23,13 @@ Only the signs of orientation determinants decide which terms appear (`predicate
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from exactgrasp.backends.exact.tables import DEGENERATE, OK
 from exactgrasp.backends.exact.tolerances import BOUND_SLACK, TERM_ERR, U
+from exactgrasp.compiling import inner, kernel
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(nogil=True, error_model="numpy")
 def face_terms(V, F, tiny, D, N):
     """Fill per face normal ``N`` (unnormalised) and ``D = (N·a) N / |N|²``, shapes (m, 3).
 
@@ -59,7 +59,7 @@ def face_terms(V, F, tiny, D, N):
             D[f, 2] = s * n2
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def edge_weight(V, D, E, ET, e, Dcoef, g):
     """``W_e = (D_t1 − D_t2) · (u × v) / 6`` for edge e, and a bound on its error: its
     rounding (`TERM_ERR`) and a third of what each face's rounded ``D`` costs (``Dcoef[t] * g``,
@@ -80,7 +80,7 @@ def edge_weight(V, D, E, ET, e, Dcoef, g):
     return w, TERM_ERR * U * dn * ui * vj + (Dcoef[t1] + Dcoef[t2]) * g / 3.0
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@inner(nogil=True, error_model="numpy")
 def _weight(V, D, E, ET, e, Wpre, have, Dcoef, g):
     """Edge e's weight and its error bound: precomputed (``have``) or from `edge_weight`."""
     if have:
@@ -88,7 +88,7 @@ def _weight(V, D, E, ET, e, Wpre, have, Dcoef, g):
     return edge_weight(V, D, E, ET, e, Dcoef, g)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def edge_sum(
     V, D, E, ET, S, cnt, Wpre, adj_start, adj_vert, adj_edge, adj_split, reps, uniform, wsum,
     Dcoef, g,
@@ -141,7 +141,7 @@ def edge_sum(
     return total, err + U * run, True
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def crossed_sum(
     V, D, E, ET, S, cnt, rec_e, rec_l, rec_d, nrec, Wpre, multi, epart, uniform, Dcoef, g
 ):  # fmt: skip
@@ -221,7 +221,7 @@ def crossed_sum(
     return total, err + 3.0 * U * run, True
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def volume_sum(hand_mesh, hand, object_mesh, obj, scratch, seg, segerr, gscale, gb):
     """Stage "sum" of a pose (``docs/exact-backend.md``, "Method", the terms and step 6, and
     "The volume's bound; certified zero"): the edge sums of both meshes, each checking its

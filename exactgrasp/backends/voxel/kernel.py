@@ -16,12 +16,12 @@ from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
 
-import numba
 import numpy as np
 
 from exactgrasp.backends.base import check_poses, resolve_jobs
 from exactgrasp.backends.voxel.grids import HandOccupancy
 from exactgrasp.backends.voxel.points import ObjectPoints
+from exactgrasp.compiling import inner, kernel
 
 __all__ = [
     "count_inside",
@@ -61,7 +61,7 @@ def _index_space(hand: HandOccupancy, poses: np.ndarray) -> tuple[np.ndarray, np
     return linear, offset
 
 
-@numba.njit(cache=True)
+@inner()
 def _interpolate(fx, fy, fz, code):
     """Trilinear interpolation in a cell whose corner values are the bits of `code`.
 
@@ -76,7 +76,7 @@ def _interpolate(fx, fy, fz, code):
     )
 
 
-@numba.njit(cache=True)
+@inner()
 def _move_boxes(a, b, margin, boxes, first, last, bounds):
     """Moved bounds of the boxes ``first:last`` into ``bounds[:, :last - first]``.
 
@@ -102,7 +102,7 @@ def _move_boxes(a, b, margin, boxes, first, last, bounds):
         bounds[4, q], bounds[5, q] = mid - reach, mid + reach
 
 
-@numba.njit(cache=True)
+@inner()
 def _count_leaf(a, b, coords, start, end, codes, cells, cell, frac):
     """How many points ``start:end`` land where the interpolated occupancy exceeds 0.5.
 
@@ -137,7 +137,7 @@ def _count_leaf(a, b, coords, start, end, codes, cells, cell, frac):
     return inside
 
 
-@numba.njit(cache=True)
+@inner()
 def _count_pose(
     a, b, margin, coords, boxes, ranges, n_roots, first_leaf, n_interior, codes, cells, tiles,
     tile_shape, shift, stack, bounds, cell, frac,
@@ -203,7 +203,7 @@ def _count_pose(
     return interior, surface
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(nogil=True)
 def count_inside(
     linear, offset, coords, n_interior, extent, boxes, ranges, n_roots, first_leaf, codes,
     tiles, shift, first, last, counts,

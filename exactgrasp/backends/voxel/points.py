@@ -13,9 +13,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
+from exactgrasp.compiling import kernel
 from exactgrasp.errors import BackendError
 
 #: Median number of samples in the authors' published ``*_P.ply`` files (14 objects).
@@ -110,7 +110,7 @@ def poisson_disk_surface(triangles: np.ndarray, spacing: float, seed: int = 0) -
 _CELLS_PER_CANDIDATE = 8
 
 
-@numba.njit(cache=True)
+@kernel()
 def dart_throw(points, spacing):
     """Indices of the points accepted in order when not closer than `spacing` to an accepted one.
 
