@@ -1,4 +1,5 @@
-"""Exception types, `require` for optional dependencies and `warn_caller`.
+"""Exception types, `require` for optional dependencies, `warn_caller` and
+`run_reporting_errors`.
 
 Every message names the input, what is wrong with it and how to fix it. Every exception class
 of exactgrasp is defined here (and exported from `exactgrasp`). This module imports nothing from
@@ -10,6 +11,11 @@ from __future__ import annotations
 import sys
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import argparse
+    from collections.abc import Callable
 
 _PACKAGE_DIR = str(Path(__file__).resolve().parent)
 
@@ -85,6 +91,36 @@ def warn_caller(message: str) -> None:
     while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
         frame, level = frame.f_back, level + 1
     warnings.warn(message, UserWarning, stacklevel=level)
+
+
+def run_reporting_errors(
+    handler: Callable[[argparse.Namespace], int | None], args: argparse.Namespace, prog: str
+) -> int:
+    """Run a command's handler, turning an `ExactGraspError` or Ctrl-C into a message.
+
+    Parameters
+    ----------
+    handler : callable
+        Takes the parsed arguments, returns the exit status (None is 0).
+    args : argparse.Namespace
+        The parsed arguments.
+    prog : str
+        The command, for the error message (``"exactgrasp descriptor"``).
+
+    Returns
+    -------
+    int
+        The handler's exit status; 2 after printing ``PROG: error: MESSAGE`` to stderr for an
+        `ExactGraspError`; 130 after printing ``interrupted`` for a KeyboardInterrupt.
+    """
+    try:
+        return int(handler(args) or 0)
+    except ExactGraspError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
 
 
 def require(module: str, feature: str, package: str | None = None, extra: str = "all"):

@@ -3,8 +3,8 @@
 The grasp files of a manifest are read as they say (``run_batch`` takes no unit or repair
 overrides), so this command has ``--on-limit`` but no ``--units``/``--repair``.
 
-May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.backends.defaults`,
-`exactgrasp.batch` (pyarrow and distributed load only when a batch runs).
+May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.batch` (pyarrow and
+distributed load only when a batch runs).
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ import argparse
 import sys
 from typing import Any
 
-from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.batch.run import DEFAULT_PART_SIZE, run_batch
 from exactgrasp.cli.common import (
+    add_backend,
     add_grasp_options,
     add_progress,
     add_sampler,
@@ -64,11 +64,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("manifest", metavar="MANIFEST", help="manifest file (.jsonl or .parquet)")
     parser.add_argument("--out", required=True, help="output folder (created; resumed if there)")
-    parser.add_argument(
-        "--backend",
-        default=DEFAULT_BACKEND,
-        help=f"backend name: {DEFAULT_BACKEND} (default), exact or a registered one",
-    )
+    add_backend(parser)
     add_param(parser)
     add_sampler(parser)
     parser.add_argument(

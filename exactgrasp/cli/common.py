@@ -1,12 +1,13 @@
-"""What the ``exactgrasp`` sub-commands share: ``--sampler``/``--steps``, ``--progress``, the
-grasp-file options (``--units``, ``--repair``, ``--on-limit``) and reading a grasp with them.
+"""What the ``exactgrasp`` sub-commands share: ``--backend``, ``--sampler``/``--steps``,
+``--progress``, the grasp-file options (``--units``, ``--repair``, ``--on-limit``) and reading a
+grasp with them.
 
 Each option is defined here once, so every command spells, checks and documents it the same
 way; errors name the flag, never the Python argument behind it. ``--param`` lives in
 `exactgrasp.cli.params`.
 
 May import: `exactgrasp.errors`, `exactgrasp.geometry.intake`, `exactgrasp.paths`,
-`exactgrasp.grasp`; no other `exactgrasp.cli` module.
+`exactgrasp.grasp`, `exactgrasp.backends.defaults`; no other `exactgrasp.cli` module.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import os
 import re
 from pathlib import Path
 
+from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.errors import ExactGraspError, SamplerError
 from exactgrasp.geometry.intake import UNITS
 from exactgrasp.grasp import Grasp
@@ -27,6 +29,7 @@ __all__ = [
     "FILE_KEYS_TO_FLAGS",
     "ON_LIMIT",
     "PYTHON_TO_FLAGS",
+    "add_backend",
     "add_grasp_options",
     "add_on_limit",
     "add_progress",
@@ -83,6 +86,19 @@ def renamed(exc: ExactGraspError, message: str) -> ExactGraspError:
         return type(exc)(message)
     except TypeError:
         return ExactGraspError(message)
+
+
+# -- --backend -------------------------------------------------------------------------------
+
+
+def add_backend(parser: argparse.ArgumentParser) -> None:
+    """The ``--backend NAME`` option of a command that runs one backend (default: the
+    paper's estimator, `exactgrasp.backends.defaults.DEFAULT_BACKEND`)."""
+    parser.add_argument(
+        "--backend",
+        default=DEFAULT_BACKEND,
+        help=f"backend name: {DEFAULT_BACKEND} (default), exact or a registered one",
+    )
 
 
 # -- --sampler and --steps --------------------------------------------------------------------

@@ -2,8 +2,7 @@
 
 The command-line face of `exactgrasp.descriptor.compute_descriptor`.
 
-May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.backends.defaults`,
-`exactgrasp.descriptor`.
+May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.descriptor`.
 """
 
 from __future__ import annotations
@@ -11,8 +10,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.cli.common import (
+    add_backend,
     add_grasp_options,
     add_progress,
     add_sampler,
@@ -51,11 +50,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file")
     parser.add_argument("-o", "--output", required=True, help="output .npz file")
-    parser.add_argument(
-        "--backend",
-        default=DEFAULT_BACKEND,
-        help=f"backend name: {DEFAULT_BACKEND} (default), exact or a registered one",
-    )
+    add_backend(parser)
     add_param(parser)
     add_sampler(parser)
     add_grasp_options(parser)

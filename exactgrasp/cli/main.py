@@ -4,7 +4,7 @@ Each sub-command is one module of `exactgrasp.cli` with ``add_parser(subparsers)
 adds its sub-parser and sets ``func`` (the handler: parsed arguments in, exit status out).
 Adding a command is a new module plus one entry in `COMMANDS`, whose order is the order of
 ``exactgrasp --help``. Handlers raise `ExactGraspError` for bad input; `main` turns it into
-a message and exit status 2.
+a message and exit status 2 (`exactgrasp.errors.run_reporting_errors`).
 
 May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.diagnostics` (third-party
 warnings stop here) and the command modules of `exactgrasp.cli`.
@@ -28,7 +28,7 @@ from exactgrasp.cli import (
     validate,
 )
 from exactgrasp.diagnostics import ignores_third_party_warnings
-from exactgrasp.errors import ExactGraspError
+from exactgrasp.errors import run_reporting_errors
 from exactgrasp.version import __version__
 
 __all__ = ["COMMANDS", "build_parser", "main"]
@@ -55,14 +55,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``exactgrasp`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except ExactGraspError as exc:
-        print(f"exactgrasp {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+    return run_reporting_errors(args.func, args, prog=f"exactgrasp {args.command}")
 
 
 if __name__ == "__main__":

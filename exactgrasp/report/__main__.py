@@ -10,8 +10,9 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from functools import partial
 
-from exactgrasp.errors import ExactGraspError
+from exactgrasp.errors import run_reporting_errors
 from exactgrasp.report.args import DESCRIPTION, add_arguments, run_from_args
 
 PROG = "python -m exactgrasp.report"
@@ -21,14 +22,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Parse ``argv`` (default: the command line), run the report; returns the exit status."""
     parser = add_arguments(argparse.ArgumentParser(prog=PROG, description=DESCRIPTION))
     args = parser.parse_args(argv)
-    try:
-        return run_from_args(args, prog=PROG)
-    except ExactGraspError as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+    return run_reporting_errors(partial(run_from_args, prog=PROG), args, prog=PROG)
 
 
 if __name__ == "__main__":
