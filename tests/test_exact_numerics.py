@@ -157,3 +157,14 @@ def test_tiny_box_overlaps_match_exact_rationals():
         got = float(ExactIntersector([hand], [obj], broadphase=None).volumes(np.eye(4)))
         close = abs(Fraction(got) - want) <= max(want, Fraction(1, 10**6)) / 10**9
         assert close or (got == 0.0 and want < Fraction(1, 10**12)), overlap
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 7, 300])
+@pytest.mark.parametrize("high", [1, 4, 10**6])
+def test_crossed_edges_are_grouped_in_numpys_stable_order(n, high):
+    # The crossed-edge sum groups records by edge with its own heap sort; ties must keep
+    # record order, as numpy's stable sort does.
+    from exactgrasp.backends.exact.sums import _order_by_key
+
+    keys = np.random.default_rng(n + high).integers(0, high, n).astype(np.int64)
+    assert np.array_equal(_order_by_key(keys), np.argsort(keys, kind="stable"))

@@ -126,7 +126,16 @@ def winding_inside_lattice(triangles, nx, ny, nz):
         lo, hi = starts[c], starts[c + 1]
         if hi == lo:
             continue
-        order = np.argsort(heights[lo:hi])
+        # Insertion sort: a column crosses the surface a few times, and numba's sorts cost
+        # seconds to compile.
+        order = np.empty(hi - lo, np.int64)
+        for m in range(hi - lo):
+            x = heights[lo + m]
+            q = m
+            while q > 0 and heights[lo + order[q - 1]] > x:
+                order[q] = order[q - 1]
+                q -= 1
+            order[q] = m
         i, j = c // ny, c % ny
         # Sweep down from the top: the winding number of a node is the sum of the signs of
         # the crossings above it.

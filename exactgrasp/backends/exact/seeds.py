@@ -133,6 +133,28 @@ def _crossing_point(px, py, pz, qx, qy, qz, dp, dq, eps, ptol, g):
 
 
 @inner(nogil=True, error_model="numpy")
+def _may_cross(FL, f, px, py, pz, qx, qy, qz, eps, ptol, g):
+    """Whether segment p q may cross face f (filter row ``FL[f]``, `prepare.face_filters`):
+    False only where both ends lie beyond the tolerance ``max(ptol, 2 eps)`` on one side of
+    its plane, or where the crossing point lies beyond its tolerance outside one of its
+    edges. ``eps`` bounds a plane distance's error, ``g`` every coordinate."""
+    dp = FL[f, 0] * px + FL[f, 1] * py + FL[f, 2] * pz - FL[f, 3]
+    dq = FL[f, 0] * qx + FL[f, 1] * qy + FL[f, 2] * qz - FL[f, 3]
+    tol = max(ptol, 2.0 * eps)
+    if ((dp > tol) & (dq > tol)) | ((dp < -tol) & (dq < -tol)):
+        return False
+    fixed, x, y, z, st = _crossing_point(px, py, pz, qx, qy, qz, dp, dq, eps, ptol, g)
+    return not (
+        fixed
+        and (
+            (FL[f, 4] * x + FL[f, 5] * y + FL[f, 6] * z < FL[f, 7] - st)
+            | (FL[f, 8] * x + FL[f, 9] * y + FL[f, 10] * z < FL[f, 11] - st)
+            | (FL[f, 12] * x + FL[f, 13] * y + FL[f, 14] * z < FL[f, 15] - st)
+        )
+    )
+
+
+@inner(nogil=True, error_model="numpy")
 def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work, n):
     """Candidate pairs of the object's edges near the hand's surface (runs ``near``, see
     `near_runs`): each edge walks the hand-grid cells it passes (a 3-D line walk, moved
@@ -272,26 +294,8 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
                             ft = ct[buf[j]]
                             # Both ends beyond the tolerance on one side: no crossing. Else the
                             # crossing point must not lie beyond it outside an edge of the face.
-                            dp = FL[ft, 0] * px + FL[ft, 1] * py + FL[ft, 2] * pz - FL[ft, 3]
-                            dq = FL[ft, 0] * qx + FL[ft, 1] * qy + FL[ft, 2] * qz - FL[ft, 3]
                             eps = (FE[ft] + FILTER_ERR) * gscale
-                            tol = max(ptol, 2.0 * eps)
-                            if ((dp > tol) & (dq > tol)) | ((dp < -tol) & (dq < -tol)):
-                                continue
-                            fixed, x, y, z, st = _crossing_point(
-                                px, py, pz, qx, qy, qz, dp, dq, eps, ptol, gscale
-                            )
-                            if fixed and (
-                                (FL[ft, 4] * x + FL[ft, 5] * y + FL[ft, 6] * z < FL[ft, 7] - st)
-                                | (
-                                    FL[ft, 8] * x + FL[ft, 9] * y + FL[ft, 10] * z
-                                    < FL[ft, 11] - st
-                                )
-                                | (
-                                    FL[ft, 12] * x + FL[ft, 13] * y + FL[ft, 14] * z
-                                    < FL[ft, 15] - st
-                                )
-                            ):
+                            if not _may_cross(FL, ft, px, py, pz, qx, qy, qz, eps, ptol, gscale):
                                 continue
                             if n > 0 and seeds[n - 1, 0] == ft and seeds[n - 1, 1] == s1:
                                 continue
@@ -417,26 +421,9 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
                                     m += 1 if hit else 0
                             for jj in range(m):
                                 s = buf[jj]
-                                dp = FL[s, 0] * px + FL[s, 1] * py + FL[s, 2] * pz - FL[s, 3]
-                                dq = FL[s, 0] * qx + FL[s, 1] * qy + FL[s, 2] * qz - FL[s, 3]
                                 eps = (FE[s] + FILTER_ERR) * gscale + ferr
-                                tol = max(ptol, 2.0 * eps)
-                                if ((dp > tol) & (dq > tol)) | ((dp < -tol) & (dq < -tol)):
-                                    continue
-                                fixed, x, y, z, st = _crossing_point(
-                                    px, py, pz, qx, qy, qz, dp, dq, eps, ptol, gscale
-                                )
-                                if fixed and (
-                                    (FL[s, 4] * x + FL[s, 5] * y + FL[s, 6] * z < FL[s, 7] - st)
-                                    | (
-                                        FL[s, 8] * x + FL[s, 9] * y + FL[s, 10] * z
-                                        < FL[s, 11] - st
-                                    )
-                                    | (
-                                        FL[s, 12] * x + FL[s, 13] * y + FL[s, 14] * z
-                                        < FL[s, 15] - st
-                                    )
-                                ):
+                                keep = _may_cross(FL, s, px, py, pz, qx, qy, qz, eps, ptol, gscale)
+                                if not keep:
                                     continue
                                 if n > 0 and seeds[n - 1, 0] == t1f and seeds[n - 1, 1] == s:
                                     continue

@@ -142,6 +142,40 @@ def edge_sum(
 
 
 @inner(nogil=True, error_model="numpy")
+def _order_by_key(key):
+    """The permutation that sorts ``key`` (n,) int64, ties by position (a heap sort: numba's
+    own sorts cost seconds to compile)."""
+    n = key.shape[0]
+    order = np.arange(n)
+    # Heapify, then move the largest to the end, n times.
+    for start in range(n // 2 - 1, -1, -1):
+        _sift(key, order, start, n)
+    for end in range(n - 1, 0, -1):
+        order[0], order[end] = order[end], order[0]
+        _sift(key, order, 0, end)
+    return order
+
+
+@inner(nogil=True, error_model="numpy")
+def _sift(key, order, root, end):
+    """Sift ``order[root]`` down the max-heap ``order[:end]`` ordered by (key, position)."""
+    while True:
+        child = 2 * root + 1
+        if child >= end:
+            return
+        a, b = order[child], order[child + 1] if child + 1 < end else order[child]
+        if child + 1 < end and (key[b] > key[a] or (key[b] == key[a] and b > a)):
+            child += 1
+            a = b
+        r = order[root]
+        if key[a] > key[r] or (key[a] == key[r] and a > r):
+            order[root], order[child] = a, r
+            root = child
+        else:
+            return
+
+
+@inner(nogil=True, error_model="numpy")
 def crossed_sum(
     V, D, E, ET, S, cnt, rec_e, rec_l, rec_d, nrec, Wpre, multi, epart, uniform, Dcoef, g
 ):  # fmt: skip
@@ -182,7 +216,7 @@ def crossed_sum(
     key = np.empty(nm, np.int64)
     for i in range(nm):
         key[i] = rec_e[multi[i]]
-    order = np.argsort(key)
+    order = _order_by_key(key)
     lam = np.empty(nm)
     i = 0
     while i < nm:
