@@ -14,6 +14,10 @@ numba's on-disk cache) plus two rules that cut compile time without changing a r
   code. A Python call (a test, an interactive check) still works: it compiles a twin with the
   wrappers, not cached, and calls that.
 
+* the on-disk cache is keyed also on the source of every module in the kernels' packages
+  (`kernel_sources_digest`): numba checks only a function's own file, so a cached kernel
+  would otherwise keep the old code of a callee (or a constant) edited in another file.
+
 Import this module's decorators in every kernel module; see "Cold start" in
 docs/performance.md for the measurements and the rules that keep compilation short (no
 ``inline="always"``, writable arrays, no numba sorts). Layer 0: imports nothing from
@@ -22,15 +26,45 @@ exactgrasp.
 
 from __future__ import annotations
 
+import hashlib
+from functools import cache
+from pathlib import Path
 from typing import Any
 
 import numba
 from numba.core import errors, types
+from numba.core.caching import FunctionCache
 from numba.core.registry import CPUDispatcher
 
-__all__ = ["inner", "kernel"]
+__all__ = ["KERNEL_PACKAGES", "inner", "kernel", "kernel_sources_digest"]
 
 _NO_WRAPPERS = ("no_cpython_wrapper", "no_cfunc_wrapper")
+
+#: The folders (relative to the package) whose modules hold kernels, the kernels' callees and
+#: the constants compiled into them; with this module, their sources key the on-disk cache.
+KERNEL_PACKAGES = ("geometry", "backends/exact", "backends/voxel")
+
+
+@cache
+def kernel_sources_digest() -> str:
+    """SHA-256 of this module and of every module in `KERNEL_PACKAGES`, in path order."""
+    root = Path(__file__).resolve().parent
+    files = [Path(__file__).resolve()]
+    for folder in KERNEL_PACKAGES:
+        files += sorted((root / folder).rglob("*.py"))
+    digest = hashlib.sha256()
+    for path in files:
+        digest.update(path.relative_to(root).as_posix().encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+class _KernelCache(FunctionCache):
+    """numba's on-disk cache of one function, its entries keyed also on
+    `kernel_sources_digest`."""
+
+    def _index_key(self, sig, codegen):
+        return (*super()._index_key(sig, codegen), kernel_sources_digest())
 
 
 class _Kernel(CPUDispatcher):
@@ -61,9 +95,12 @@ class _Inner(_Kernel):
 
 def _make(cls: type, options: dict[str, Any]):
     def decorate(function):
-        dispatcher = numba.njit(**{"cache": True, **options})(function)
+        settings = {"cache": True, **options}
+        dispatcher = numba.njit(**settings)(function)
         # Same layout, one overridden method: the dispatcher keeps every numba behaviour.
         dispatcher.__class__ = cls
+        if settings["cache"]:
+            dispatcher._cache = _KernelCache(function)
         return dispatcher
 
     return decorate

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import numba
 import numpy as np
 
 from exactgrasp.compiling import inner, kernel
@@ -39,3 +42,44 @@ def test_inner_kernels_have_no_python_wrapper_but_python_can_call_them():
     assert "no_cpython_wrapper" not in _total.targetoptions
     assert _scaled(np.array([3.0, 4.0]), 2, True) == 6.0
     assert _scaled(np.array([3.0, 4.0]), 2, False) == 4.0
+
+
+def test_cache_entries_are_keyed_on_every_kernel_modules_source(monkeypatch):
+    # numba checks only a kernel's own file; an edited callee in another file must not load
+    # the caller's old machine code.
+    from exactgrasp import compiling
+    from exactgrasp.backends.exact.pose import pose_volumes
+
+    cache = pose_volumes._cache
+    assert isinstance(cache, compiling._KernelCache)
+    sig, codegen = (numba.float64,), pose_volumes.targetctx.codegen()
+    key = cache._index_key(sig, codegen)
+    assert key[-1] == compiling.kernel_sources_digest()
+    monkeypatch.setattr(compiling, "kernel_sources_digest", lambda: "edited")
+    assert cache._index_key(sig, codegen)[:-1] == key[:-1]
+    assert cache._index_key(sig, codegen)[-1] == "edited"
+
+
+def test_kernel_sources_digest_covers_callee_and_constant_modules(tmp_path, monkeypatch):
+    from exactgrasp import compiling
+
+    root = Path(compiling.__file__).parent
+    assert (root / "backends/exact/tolerances.py").is_file()
+    assert (root / "geometry/predicates.py").is_file()
+    digest = compiling.kernel_sources_digest()
+    assert len(digest) == 64 and digest == compiling.kernel_sources_digest()
+    # A copy of the package with one constant changed digests differently.
+    import shutil
+
+    copy = tmp_path / "exactgrasp"
+    shutil.copytree(root, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    tolerances = copy / "backends/exact/tolerances.py"
+    tolerances.write_text(tolerances.read_text() + "\n# edited\n")
+    monkeypatch.setattr(compiling, "__file__", str(copy / "compiling.py"))
+    compiling.kernel_sources_digest.cache_clear()
+    try:
+        assert compiling.kernel_sources_digest() != digest
+    finally:
+        monkeypatch.undo()
+        compiling.kernel_sources_digest.cache_clear()
+    assert compiling.kernel_sources_digest() == digest

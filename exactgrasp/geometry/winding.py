@@ -19,18 +19,24 @@ __all__ = ["winding_inside_lattice", "winding_number"]
 @kernel(nogil=True, error_model="numpy")
 def winding_number(x, V, F):
     """Generalised winding number of point x with respect to a closed mesh (not rounded)."""
+    # Scalar loads: a vector temporary per corner would allocate three arrays per triangle.
+    x0, x1, x2 = x[0], x[1], x[2]
     total = 0.0
     for f in range(F.shape[0]):
-        a = V[F[f, 0]] - x
-        b = V[F[f, 1]] - x
-        c = V[F[f, 2]] - x
-        la = np.sqrt(a @ a)
-        lb = np.sqrt(b @ b)
-        lc = np.sqrt(c @ c)
-        num = a[0] * (b[1] * c[2] - b[2] * c[1])
-        num += a[1] * (b[2] * c[0] - b[0] * c[2])
-        num += a[2] * (b[0] * c[1] - b[1] * c[0])
-        den = la * lb * lc + (a @ b) * lc + (b @ c) * la + (c @ a) * lb
+        i, j, k = F[f, 0], F[f, 1], F[f, 2]
+        a0, a1, a2 = V[i, 0] - x0, V[i, 1] - x1, V[i, 2] - x2
+        b0, b1, b2 = V[j, 0] - x0, V[j, 1] - x1, V[j, 2] - x2
+        c0, c1, c2 = V[k, 0] - x0, V[k, 1] - x1, V[k, 2] - x2
+        la = np.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+        lb = np.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
+        lc = np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+        num = a0 * (b1 * c2 - b2 * c1)
+        num += a1 * (b2 * c0 - b0 * c2)
+        num += a2 * (b0 * c1 - b1 * c0)
+        ab = a0 * b0 + a1 * b1 + a2 * b2
+        bc = b0 * c0 + b1 * c1 + b2 * c2
+        ca = c0 * a0 + c1 * a1 + c2 * a2
+        den = la * lb * lc + ab * lc + bc * la + ca * lb
         total += 2.0 * np.arctan2(num, den)
     return total / (4.0 * np.pi)
 
