@@ -29,7 +29,7 @@ def cell_index(x, y, z, l0, l1, l2, ih, n0, n1, n2):
     return (i * n1 + j) * n2 + k
 
 
-@kernel(nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def point_status(x, lo, h, n, status):
     """Inside (1) / outside (0) from the grid's cell statuses; -1 when x is in a surface cell.
 

@@ -121,7 +121,7 @@ def hand_statuses(S, V, R, t, grid, reps, crossed, whole, uniform):
                 S[i] = st
 
 
-@kernel(nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def ray_status(x, V, F, grid, fstamp, token):
     """Inside (1) or outside (0) of point x against a closed mesh with its cell grid, exactly.
 

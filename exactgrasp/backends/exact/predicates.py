@@ -8,7 +8,7 @@ numba, `geometry.predicates` and `tables` (the result codes) only.
 from __future__ import annotations
 
 from exactgrasp.backends.exact.tables import DEGENERATE
-from exactgrasp.compiling import inner, kernel
+from exactgrasp.compiling import inner
 from exactgrasp.geometry.predicates import orient
 
 #: Outcomes of `edge_triangle` (and of a face pair, see `pairs.pair`): no crossing, a crossing,
@@ -75,7 +75,7 @@ def tri_box(cx, cy, cz, hh, a, b, c):
     )
 
 
-@kernel(nogil=True, error_model="numpy")
+@inner(nogil=True, error_model="numpy")
 def tri_box_xyz(cx, cy, cz, hx, hy, hz, ax, ay, az, bx, by, bz, qx, qy, qz):
     """Does the triangle with corners (ax, ay, az), (bx, by, bz), (qx, qy, qz) touch the box of
     centre (cx, cy, cz) and half sizes hx, hy, hz? Scalars only (no array views in hot loops).
