@@ -109,6 +109,19 @@ def test_a_single_pose_is_named_without_an_index():
         ex.volumes(pose)
 
 
+def test_a_determinant_just_off_one_says_how_far_it_is():
+    hand = [box_arrays([0, 0, 0], [1, 1, 1])]
+    ex = ExactIntersector(hand, hand, broadphase=None)
+    pose = np.eye(4)
+    pose[:3, :3] *= np.sqrt(1.0 + 0.9e-9)  # orthonormal to 0.9e-9, determinant 1 + 1.35e-9
+    with pytest.raises(
+        BackendError,
+        match=r"^poses is not a rigid motion: its rotation part has determinant "
+        r"1\.00000000135\d*, 1\.35e-09 from 1\. ",
+    ):
+        ex.volumes(pose)
+
+
 # -- options are checked in the constructor --------------------------------------------------
 
 CELL = "must be a positive, finite number or None, got"

@@ -351,12 +351,18 @@ def test_ray_status_agrees_with_winding_number():
     # Points in a shell around the surface, where cells are touched by it.
     d = rng.normal(size=(400, 3))
     pts = d / np.linalg.norm(d, axis=1)[:, None] * rng.uniform(0.8, 1.2, (400, 1))
-    got = np.array([ray_status(p, V, F, grid, stamp, k) for k, p in enumerate(pts)])
+    got = np.array([ray_status(p, V, F, grid, stamp, k, 0.0) for k, p in enumerate(pts)])
     want = np.array([round(winding_number(p, V, F)) & 1 for p in pts])
     np.testing.assert_array_equal(got, want)
     assert 100 < want.sum() < 300
+    # Points known up to a displacement below the cells' margin: the same answers.
+    near = [ray_status(p, V, F, grid, stamp, 1000 + k, 1e-13) for k, p in enumerate(pts)]
+    np.testing.assert_array_equal(near, want)
     # A point on the surface (a vertex) has no certain status.
-    assert ray_status(V[0].copy(), V, F, grid, stamp, 10_000) == -1
+    assert ray_status(V[0].copy(), V, F, grid, stamp, 10_000, 0.0) == -1
+    # A point that may lie farther from the one meant than the cells' margin: no answer.
+    inside = pts[np.flatnonzero(want)[0]]
+    assert ray_status(inside, V, F, grid, stamp, 10_001, 1e-3) == -1
 
 
 def test_small_shell_inside_object_surface_cells_matches_plain_boolean():

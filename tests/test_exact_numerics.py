@@ -168,3 +168,57 @@ def test_crossed_edges_are_grouped_in_numpys_stable_order(n, high):
 
     keys = np.random.default_rng(n + high).integers(0, high, n).astype(np.int64)
     assert np.array_equal(_order_by_key(keys), np.argsort(keys, kind="stable"))
+
+
+def test_hand_vertex_near_a_cell_boundary_is_unknown_when_the_inverse_errs_more():
+    # Hand vertices reach the object's grid through R^T, which errs by R's departure from a
+    # rotation: a vertex that close to a surface cell may truly lie in it.
+    from exactgrasp.backends.exact.classify import hand_statuses
+    from exactgrasp.backends.exact.grids import build_grid
+    from exactgrasp.backends.exact.tolerances import GRID_MARGIN
+
+    V, F = box(np.zeros(3), np.ones(3))
+    h = 0.25
+    grid = build_grid(V, F, h)
+    n = grid.shape
+    status = grid.status.reshape(tuple(n))
+    # A known cell beside a surface cell along x, and a point just inside it at their face.
+    i, j, k = np.argwhere((status[:-1] >= 0) & (status[1:] < 0))[0]
+    point = grid.corner + (np.array([i + 1, j + 0.5, k + 0.5])) * h - [1e-7 * h, 0, 0]
+    eye, zero = np.eye(3), np.zeros(3)
+    for err, want_status, want_uniform in (
+        (0.0, status[i, j, k], True),
+        (0.5 * GRID_MARGIN * h, status[i, j, k], True),
+        (1e-6 * h, -1, False),
+    ):
+        S = np.full(1, -7, np.int8)
+        uniform = np.zeros(1, np.bool_)
+        reps = np.array([[0, 0], [-1, 1]], np.int64)
+        hand_statuses(
+            S, point[None].copy(), eye, zero, grid, reps, np.zeros(1, np.bool_), True, uniform,
+            err,
+        )  # fmt: skip
+        assert (S[0], uniform[0]) == (want_status, want_uniform), err
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_nearly_rigid_poses_match_the_boolean_of_the_same_matrices(seed):
+    # Poses up to 1e-9 from a rotation are accepted; the kernel then works with R^T for the
+    # inverse, and must still agree with manifold3d applying the matrices as given.
+    from exactgrasp.backends.exact import agrees, plain_volumes
+
+    rng = np.random.default_rng(seed)
+    hand = [
+        box(np.array([-0.6, -0.6, -0.1]), np.array([0.6, 0.6, 0.1])),
+        sphere(0.4, np.array([0.0, 0.0, 0.5]), 2),
+    ]
+    obj = [sphere(0.5, np.zeros(3), 2)]
+    P = rigid(rng, 12, tmax=0.6)
+    # Orthonormal to 6e-10 and of determinant within 9e-10 of 1: accepted.
+    P[:, :3, :3] *= 1.0 + 3e-10 * rng.uniform(-1.0, 1.0, (12, 1, 1))
+    ex = ExactIntersector(hand, obj, broadphase=None)
+    got = ex.volumes(P)
+    want = plain_volumes(hand, obj, P)
+    assert (got > 0).sum() >= 6
+    assert agrees(got, want, ex.hand_volume).all()
+    assert (np.abs(got - want) <= ex.volume_bounds + 1e-9 * ex.hand_volume).all()

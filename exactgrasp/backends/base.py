@@ -83,7 +83,10 @@ def check_poses(poses: np.ndarray, name: str = "poses") -> np.ndarray:
         ),
         (
             np.abs(determinant - 1.0) > RIGID_ATOL,
-            lambda i: f"its rotation part has determinant {determinant[i]:.6g}, not 1",
+            lambda i: (
+                f"its rotation part has determinant {determinant[i]:.15g}, "
+                f"{abs(determinant[i] - 1.0):.3g} from 1"
+            ),
         ),
     )
     for bad, what in checks:

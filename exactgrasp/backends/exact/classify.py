@@ -13,7 +13,7 @@ import numpy as np
 from exactgrasp.backends.exact.cells import cell_index, point_status
 from exactgrasp.backends.exact.predicates import edge_triangle
 from exactgrasp.backends.exact.tables import DEGENERATE, OK
-from exactgrasp.backends.exact.tolerances import ROUNDING_PAD
+from exactgrasp.backends.exact.tolerances import GRID_MARGIN, ROUNDING_PAD
 from exactgrasp.compiling import inner, kernel
 from exactgrasp.geometry.predicates import orient, orient_bound
 
@@ -86,15 +86,29 @@ def object_statuses(S, V, grid):
 
 
 @inner(nogil=True, error_model="numpy")
-def hand_statuses(S, V, R, t, grid, reps, crossed, whole, uniform):
+def _off_centre(u, near):
+    """Whether coordinate ``u`` (in cell units) lies within ``near`` of a cell boundary."""
+    f = u - np.floor(u)
+    return (f < near) | (f > 1.0 - near)
+
+
+@inner(nogil=True, error_model="numpy")
+def hand_statuses(S, V, R, t, grid, reps, crossed, whole, uniform, err):
     """`object_statuses` of the hand's vertices in the object's grid, part by part (``reps``,
     `tables.HandTables.parts`), the vertices moved by ``x -> R^T (x - t)``.
 
     A part none of whose own edges is crossed (``crossed[k]`` False; with ``whole``) has one
     status: its vertices are joined by those edges (`grids.part_order`). So the first vertex
     found in a cell of known status gives every vertex's status (``uniform[k]`` True). Other
-    parts get a status per vertex (-1 where unknown)."""
+    parts get a status per vertex (-1 where unknown).
+
+    ``err`` bounds how far a moved vertex lies from where the pose's inverse puts it (R's
+    departure from a rotation, `seeds.frame_defect`, and rounding). Where it exceeds the cells'
+    margin (`GRID_MARGIN`), a vertex within ``err`` of its cell's boundary is unknown (-1): the
+    true point may lie in the neighbouring cell, which the surface may touch."""
     lo, ih, n, status = grid.corner, 1.0 / grid.cell, grid.shape, grid.status
+    # In cell units: a fraction of a cell this close to 0 or 1 is near the cell's boundary.
+    near = err * ih if err > GRID_MARGIN * grid.cell else -1.0
     l0, l1, l2, n0, n1, n2 = lo[0], lo[1], lo[2], n[0], n[1], n[2]
     r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
     r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
@@ -110,6 +124,12 @@ def hand_statuses(S, V, R, t, grid, reps, crossed, whole, uniform):
             z = r02 * d0 + r12 * d1 + r22 * d2
             c = cell_index(x, y, z, l0, l1, l2, ih, n0, n1, n2)
             si = 0 if c < 0 else status[c]
+            if near > 0.0 and (
+                _off_centre((x - l0) * ih, near)
+                | _off_centre((y - l1) * ih, near)
+                | _off_centre((z - l2) * ih, near)
+            ):
+                si = -1
             if each:
                 S[i] = si
             elif si >= 0:
@@ -122,7 +142,7 @@ def hand_statuses(S, V, R, t, grid, reps, crossed, whole, uniform):
 
 
 @inner(nogil=True, error_model="numpy")
-def ray_status(x, V, F, grid, fstamp, token):
+def ray_status(x, V, F, grid, fstamp, token, xerr):
     """Inside (1) or outside (0) of point x against a closed mesh with its cell grid, exactly.
 
     Walks from x's cell along +x in its row of cells to the first cell of known status, and
@@ -142,9 +162,16 @@ def ray_status(x, V, F, grid, fstamp, token):
         Scratch space marking faces already tested; entries equal to `token` are skipped.
     token : int
         A value not yet used in `fstamp`.
+    xerr : float
+        How far x may lie from the point meant (0 where x is exact up to rounding): every
+        orientation's bound widens by what moving x that far can change it, and beyond the
+        cells' margin (`GRID_MARGIN`, which keeps unlisted faces away from the walk) the test
+        answers -1.
     """
     lo, h, n, status = grid.corner, grid.cell, grid.shape, grid.status
     cs, ct = grid.cell_start, grid.cell_faces
+    if xerr >= GRID_MARGIN * h:
+        return -1
     i = int(np.floor((x[0] - lo[0]) / h))
     j = int(np.floor((x[1] - lo[1]) / h))
     k = int(np.floor((x[2] - lo[2]) / h))
@@ -177,7 +204,9 @@ def ray_status(x, V, F, grid, fstamp, token):
                 hi = max(a[ax], b[ax], d[ax], x[ax], y_ax)
                 lo_ = min(a[ax], b[ax], d[ax], x[ax], y_ax)
                 ext = max(ext, hi - lo_)
-            bound = orient_bound(ext * ROUNDING_PAD)
+            # An orientation with x as a corner moves by at most |(p - q) x (r - q)| <= 3 ext²
+            # times x's displacement.
+            bound = orient_bound(ext * ROUNDING_PAD) + 4.0 * ext * ext * xerr
             dp, okp = orient(a[0], a[1], a[2], b[0], b[1], b[2], d[0], d[1], d[2],
                              x[0], x[1], x[2], bound)  # fmt: skip
             dq, okq = orient(a[0], a[1], a[2], b[0], b[1], b[2], d[0], d[1], d[2],
@@ -240,7 +269,7 @@ def surfaces_cross(poses, AV, acomp, ancomp, agrid, BV0, bcomp, bncomp, bgrid):
 
 @inner(nogil=True, error_model="numpy")
 def classify_vertices(
-    R, t, hand_mesh, hand, object_mesh, obj, hand_grid, object_grid, scratch, code, token
+    R, t, hand_mesh, hand, object_mesh, obj, hand_grid, object_grid, scratch, code, token, ferr
 ):  # fmt: skip
     """Stage "classify" of a pose (``docs/exact-backend.md``, "Method", steps 1, 4 and 5):
     every vertex's status against the other mesh, after the search (`search.trace_pairs`) has
@@ -251,8 +280,9 @@ def classify_vertices(
     own edges is crossed as a whole; then unknown vertices take a neighbour's status across an
     edge, flipped by the edge's crossings, and a shell with none known gets `ray_status`.
     With ``code`` other than `OK` (the search stopped), only the statuses from the grids are
-    set. ``token`` is the last stamp the point tests used. Returns (code, token): `DEGENERATE`
-    where a point test is uncertain.
+    set. ``token`` is the last stamp the point tests used; ``ferr`` bounds how far a hand vertex
+    moved into the object's frame lies from where the pose's inverse puts it
+    (`hand_statuses`). Returns (code, token): `DEGENERATE` where a point test is uncertain.
     """
     AV, AF = hand_mesh.vertices, hand_mesh.faces
     BV0, BF, BV = object_mesh.vertices, object_mesh.faces, scratch.object_V
@@ -265,7 +295,7 @@ def classify_vertices(
     for k in range(scratch.work.nrec[0]):
         if epart[arec.edge[k]] >= 0:
             crossed[epart[arec.edge[k]]] = True
-    hand_statuses(AS, AV, R, t, object_grid, cell_rep, crossed, code == OK, uniform)
+    hand_statuses(AS, AV, R, t, object_grid, cell_rep, crossed, code == OK, uniform, ferr)
     crossed[:] = False
     if code == OK:
         u = resolve(
@@ -282,7 +312,7 @@ def classify_vertices(
                     + R[2, k] * (AV[u, 2] - t[2])
                 )
             token += 1
-            AS[u] = ray_status(xq, BV0, BF, object_grid, scratch.object_stamp, token)
+            AS[u] = ray_status(xq, BV0, BF, object_grid, scratch.object_stamp, token, ferr)
             if AS[u] < 0:
                 code = DEGENERATE
             else:
@@ -299,7 +329,7 @@ def classify_vertices(
         )  # fmt: skip
         while u >= 0 and code == OK:
             token += 1
-            BS[u] = ray_status(BV[u], AV, AF, hand_grid, scratch.hand_stamp, token)
+            BS[u] = ray_status(BV[u], AV, AF, hand_grid, scratch.hand_stamp, token, 0.0)
             if BS[u] < 0:
                 code = DEGENERATE
             else:

@@ -261,8 +261,9 @@ def pose_volumes(
             )  # fmt: skip
         # After the pairs: the parts whose own edges nothing crosses are classified whole.
         code, token = classify_vertices(
-            R, t, hand_mesh, hand, object_mesh, obj, hand_grid, object_grid, scratch, code, token
-        )
+            R, t, hand_mesh, hand, object_mesh, obj, hand_grid, object_grid, scratch, code,
+            token, ferr,
+        )  # fmt: skip
         if code == OK:
             vol, bound, code = volume_sum(
                 hand_mesh, hand, object_mesh, obj, scratch, seg, segerr, gscale, gb
