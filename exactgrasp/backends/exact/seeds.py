@@ -133,13 +133,15 @@ def _crossing_point(px, py, pz, qx, qy, qz, dp, dq, eps, ptol, g):
 
 
 @inner(nogil=True, error_model="numpy")
-def _may_cross(FL, f, px, py, pz, qx, qy, qz, eps, ptol, g):
-    """Whether segment p q may cross face f (filter row ``FL[f]``, `prepare.face_filters`):
-    False only where both ends lie beyond the tolerance ``max(ptol, 2 eps)`` on one side of
-    its plane, or where the crossing point lies beyond its tolerance outside one of its
-    edges. ``eps`` bounds a plane distance's error, ``g`` every coordinate."""
-    dp = FL[f, 0] * px + FL[f, 1] * py + FL[f, 2] * pz - FL[f, 3]
-    dq = FL[f, 0] * qx + FL[f, 1] * qy + FL[f, 2] * qz - FL[f, 3]
+def _may_cross(row, px, py, pz, qx, qy, qz, eps, ptol, g):
+    """Whether segment p q may cross a face whose filter row (`prepare.face_filters`) is
+    ``row``, a tuple of its 16 values: False only where both ends lie beyond the tolerance
+    ``max(ptol, 2 eps)`` on one side of its plane, or where the crossing point lies beyond its
+    tolerance outside one of its edges. ``eps`` bounds a plane distance's error, ``g`` every
+    coordinate. A tuple, not the filters' array: an array argument would cost two atomic
+    reference-count updates a call."""
+    dp = row[0] * px + row[1] * py + row[2] * pz - row[3]
+    dq = row[0] * qx + row[1] * qy + row[2] * qz - row[3]
     tol = max(ptol, 2.0 * eps)
     if ((dp > tol) & (dq > tol)) | ((dp < -tol) & (dq < -tol)):
         return False
@@ -147,11 +149,20 @@ def _may_cross(FL, f, px, py, pz, qx, qy, qz, eps, ptol, g):
     return not (
         fixed
         and (
-            (FL[f, 4] * x + FL[f, 5] * y + FL[f, 6] * z < FL[f, 7] - st)
-            | (FL[f, 8] * x + FL[f, 9] * y + FL[f, 10] * z < FL[f, 11] - st)
-            | (FL[f, 12] * x + FL[f, 13] * y + FL[f, 14] * z < FL[f, 15] - st)
+            (row[4] * x + row[5] * y + row[6] * z < row[7] - st)
+            | (row[8] * x + row[9] * y + row[10] * z < row[11] - st)
+            | (row[12] * x + row[13] * y + row[14] * z < row[15] - st)
         )
     )
+
+
+@inner(nogil=True, error_model="numpy")
+def _filter_row(FL, f):
+    """Row f of the filters (m, 16) as a tuple, for `_may_cross`."""
+    return (
+        FL[f, 0], FL[f, 1], FL[f, 2], FL[f, 3], FL[f, 4], FL[f, 5], FL[f, 6], FL[f, 7],
+        FL[f, 8], FL[f, 9], FL[f, 10], FL[f, 11], FL[f, 12], FL[f, 13], FL[f, 14], FL[f, 15],
+    )  # fmt: skip
 
 
 @inner(nogil=True, error_model="numpy")
@@ -295,7 +306,9 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
                             # Both ends beyond the tolerance on one side: no crossing. Else the
                             # crossing point must not lie beyond it outside an edge of the face.
                             eps = (FE[ft] + FILTER_ERR) * gscale
-                            if not _may_cross(FL, ft, px, py, pz, qx, qy, qz, eps, ptol, gscale):
+                            if not _may_cross(
+                                _filter_row(FL, ft), px, py, pz, qx, qy, qz, eps, ptol, gscale
+                            ):
                                 continue
                             if n > 0 and seeds[n - 1, 0] == ft and seeds[n - 1, 1] == s1:
                                 continue
@@ -422,7 +435,9 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
                             for jj in range(m):
                                 s = buf[jj]
                                 eps = (FE[s] + FILTER_ERR) * gscale + ferr
-                                keep = _may_cross(FL, s, px, py, pz, qx, qy, qz, eps, ptol, gscale)
+                                keep = _may_cross(
+                                    _filter_row(FL, s), px, py, pz, qx, qy, qz, eps, ptol, gscale
+                                )
                                 if not keep:
                                     continue
                                 if n > 0 and seeds[n - 1, 0] == t1f and seeds[n - 1, 1] == s:

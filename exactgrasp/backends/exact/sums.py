@@ -81,14 +81,6 @@ def edge_weight(V, D, E, ET, e, Dcoef, g):
 
 
 @inner(nogil=True, error_model="numpy")
-def _weight(V, D, E, ET, e, Wpre, have, Dcoef, g):
-    """Edge e's weight and its error bound: precomputed (``have``) or from `edge_weight`."""
-    if have:
-        return Wpre[e, 0], Wpre[e, 1]
-    return edge_weight(V, D, E, ET, e, Dcoef, g)
-
-
-@inner(nogil=True, error_model="numpy")
 def edge_sum(
     V, D, E, ET, S, cnt, Wpre, adj_start, adj_vert, adj_edge, adj_split, reps, uniform, wsum,
     Dcoef, g,
@@ -207,7 +199,12 @@ def crossed_sum(
         if S[E[e, 1]] == s0:
             return 0.0, 0.0, False
         frac = rec_l[i] if s0 == 1 else 1.0 - rec_l[i]
-        we, ee = _weight(V, D, E, ET, e, Wpre, have, Dcoef, g)
+        # The branch here, not in a routine taking the arrays: that would cost atomic
+        # reference-count updates per record.
+        if have:
+            we, ee = Wpre[e, 0], Wpre[e, 1]
+        else:
+            we, ee = edge_weight(V, D, E, ET, e, Dcoef, g)
         total += frac * we
         err += ee + abs(we) * rec_d[i]
         run += abs(total)
@@ -245,7 +242,12 @@ def crossed_sum(
             inside = not inside
         if inside:
             frac += 1.0 - last
-        we, ee = _weight(V, D, E, ET, e, Wpre, have, Dcoef, g)
+        # The branch here, not in a routine taking the arrays: that would cost atomic
+        # reference-count updates per record.
+        if have:
+            we, ee = Wpre[e, 0], Wpre[e, 1]
+        else:
+            we, ee = edge_weight(V, D, E, ET, e, Dcoef, g)
         total += frac * we
         # Sorting is 1-Lipschitz in each parameter: the alternating sum errs by at most
         # (crossings) times the largest parameter error.
