@@ -210,6 +210,27 @@ def test_validate_parameters_names_owner_parameter_value_and_what_is_allowed(par
         validate_parameters(TABLE, params, "Toy")
 
 
+def test_the_documented_example_of_a_refusal():
+    # docs/backends.md: SpheresBackend(radius=-1).
+    table = {"radius": Param(Interval(float, 0, None, closed="neither"), hint="sphere radius, m")}
+    with pytest.raises(
+        BackendError,
+        match=r"^SpheresBackend: radius must be a positive, finite number, got -1 \(sphere "
+        r"radius, m\)\.$",
+    ):
+        validate_parameters(table, {"radius": -1}, "SpheresBackend")
+
+
+def test_options_never_take_a_bool_for_0_or_1():
+    table = {"bit": Param(Options((0, 1)))}
+    for flag in (True, False, np.bool_(True)):
+        with pytest.raises(BackendError, match=rf"^Toy: bit must be 0 or 1, got {flag!r}\.$"):
+            validate_parameters(table, {"bit": flag}, "Toy")
+    # A listed value comes back as listed: a plain int for numpy's, as JSON needs.
+    out = validate_parameters(table, {"bit": np.int64(1)}, "Toy")
+    assert out == {"bit": 1} and type(out["bit"]) is int
+
+
 def test_validate_parameters_returns_plain_values():
     out = validate_parameters(
         TABLE,

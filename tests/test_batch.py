@@ -224,6 +224,11 @@ def test_parquet_manifest_gives_the_same_run(manifest, run_one, tmp_path):
         (['{"id": "a", "grasp": "x.json"}', '{"grasp": "y.json"}'], "line 2.*'id' is missing"),
         (['{"id": "a", "grasp": "x.json"}', "", '{"id": "b", '], "line 3.*not valid JSON"),
         (['{"id": "", "grasp": "x.json"}'], "line 1.*empty"),
+        (
+            ['{"id": [1], "grasp": "x.json"}'],
+            "line 1: 'id' is a list; every row needs a string or",
+        ),
+        (['{"id": "a", "grasp": "x.json"}', "[1, 2]"], "line 2: expected a JSON object with 'id'"),
         ([], "no rows"),
     ],
 )
@@ -233,6 +238,27 @@ def test_manifest_errors_before_any_work(tmp_path, lines, match):
     with pytest.raises(BatchError, match=match):
         _run(path, tmp_path / "out", workers=0)
     assert not (tmp_path / "out").exists()
+
+
+def test_reformatted_manifest_keeps_its_hash(tmp_path):
+    pose = np.eye(4).tolist()
+    one = tmp_path / "one.jsonl"
+    one.write_text(
+        json.dumps({"id": "g1", "grasp": "x.json"})
+        + "\n"
+        + json.dumps({"id": 2, "grasp": {"object": "o.stl", "object_pose_in_hand": pose}})
+        + "\n"
+    )
+    other = tmp_path / "other.ndjson"  # blank lines, spacing, key order, "2" for 2
+    other.write_text(
+        '\n{ "grasp" : "x.json",   "id" : "g1" }\n\n'
+        + json.dumps({"grasp": {"object_pose_in_hand": pose, "object": "o.stl"}, "id": "2"})
+        + "\n"
+    )
+    assert read_manifest(one).sha256 == read_manifest(other).sha256
+    changed = tmp_path / "changed.jsonl"
+    changed.write_text(one.read_text().replace("x.json", "y.json"))
+    assert read_manifest(changed).sha256 != read_manifest(one).sha256
 
 
 def test_manifest_errors_on_the_command_line(tmp_path, capsys):

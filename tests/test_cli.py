@@ -20,6 +20,7 @@ from exactgrasp.backends import registry
 from exactgrasp.backends.params import Interval, Options, Param
 from exactgrasp.backends.registry import backend_class
 from exactgrasp.cli import build_parser, main
+from exactgrasp.cli import descriptor as descriptor_command
 from exactgrasp.cli.common import sampler_from_args
 from exactgrasp.cli.params import backend_names, split_params
 from exactgrasp.geometry.files import write_ply
@@ -276,6 +277,51 @@ def test_param_errors_in_batch_stop_before_any_work(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
     argv = ["batch", str(manifest), "--out", str(tmp_path / "out"), "--backend", "nope"]
     assert "--backend nope: unknown backend 'nope'" in _error(capsys, argv)
+
+
+@pytest.mark.parametrize(
+    ("flags", "named"),
+    [
+        (["--workers", "-2"], "--workers must be an integer >= 0, got -2."),
+        (["--part-size", "0"], "--part-size must be an integer >= 1, got 0."),
+        (
+            ["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"],
+            "--workers sets up a local cluster; with --scheduler the cluster's own workers "
+            "compute: leave --workers out.",
+        ),
+    ],
+)
+def test_batch_errors_name_the_flag_and_stop_before_any_work(tmp_path, capsys, flags, named):
+    manifest = tmp_path / "m.jsonl"
+    manifest.write_text('{"id": 1, "grasp": "g.json"}\n')
+    err = _error(capsys, ["batch", str(manifest), "--out", str(tmp_path / "out"), *flags])
+    assert named in err
+    assert "workers=" not in err and "part_size" not in err and "scheduler=" not in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_ctrl_c_exits_130_and_version_prints_the_version(monkeypatch, capsys):
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(descriptor_command, "cmd_descriptor", interrupted)
+    assert main(["descriptor", "g.json", "-o", "x.npz"]) == 130
+    assert capsys.readouterr().err == "interrupted\n"
+    with pytest.raises(SystemExit) as info:
+        main(["--version"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out == f"exactgrasp {eg.__version__}\n"
+
+
+def test_a_scaled_pose_in_a_grasp_file_names_units_flag_and_key(grasp_file, tmp_path, capsys):
+    data = json.loads(grasp_file.read_text())
+    data["object_pose_in_hand"] = np.diag([10.0, 10.0, 10.0, 1.0]).tolist()
+    scaled = tmp_path / "scaled.json"
+    scaled.write_text(json.dumps(data))
+    err = _error(capsys, ["descriptor", str(scaled), "-o", str(tmp_path / "x.npz")])
+    assert f"{scaled}: object_pose_in_hand is not a rigid transform: " in err
+    assert "(max |R^T R - I| = 99: a scale or a shear)" in err
+    assert 'takes --units (or "object_units" in the grasp file), not a scale in the pose' in err
 
 
 def test_params_go_to_the_backends_that_take_them():

@@ -102,6 +102,42 @@ def test_nan_volumes_from_a_backend_are_an_error(grasp):
         eg.compute_descriptor(grasp, eg.PathSampler(2, 1, 2, n_steps=3), backend=NanBackend())
 
 
+def test_negative_volumes_from_a_backend_are_an_error(grasp):
+    class NegativeBackend(ShiftBackend):
+        name = "negative"
+
+        def volumes(self, grasp, poses):
+            out = super().volumes(grasp, poses)
+            out.flat[[1, 4]] = -1e-12
+            return out
+
+    with pytest.raises(
+        DescriptorError,
+        match=r"^backend 'negative' returned 2 invalid \(NaN or negative\) volumes for grasp 'g'",
+    ):
+        eg.compute_descriptor(grasp, eg.PathSampler(2, 1, 2, n_steps=3), backend=NegativeBackend())
+
+
+def test_descriptors_of_different_samplers_of_one_shape_are_not_comparable(grasp):
+    # Same (n_paths, n_steps), other paths: the values of row p do not describe the same path.
+    a = eg.compute_descriptor(grasp, eg.PathSampler(3, 2, 2, n_steps=4), backend="shift")
+    other = eg.PathSampler(3, 2, 2, n_steps=4, amounts=[-0.25, 0.25])
+    b = eg.compute_descriptor(grasp, other, backend="shift")
+    assert a.shape == b.shape
+    for call in (lambda: eg.distance(a, b), lambda: eg.pairwise_distances([a, b])):
+        with pytest.raises(
+            DescriptorError, match=r"come from different samplers .* not comparable"
+        ):
+            call()
+    assert eg.distance(a, a) == 0.0
+
+
+def test_metadata_records_the_frame_convention(grasp):
+    d = eg.compute_descriptor(grasp, eg.PathSampler(2, 1, 2, n_steps=3), backend="shift")
+    assert d.metadata["frame"] == grasp.frame.to_dict()
+    assert d.metadata["frame"]["scale"] == pytest.approx(2 / 0.08)
+
+
 def test_registry_errors():
     with pytest.raises(eg.BackendError, match="unknown backend 'nope'; available:"):
         eg.get_backend("nope")

@@ -175,3 +175,18 @@ def test_the_exact_descriptor_takes_the_hand_volume_from_the_intersector(grasp):
     assert d.metadata["hand_volume_canonical"] == built == backend.hand_volume(grasp)
     assert built == pytest.approx(grasp.canonical_hand_volume, rel=1e-12)
     assert d.metadata["hand_volume_m3"] == pytest.approx(grasp.hand.volume, rel=1e-12)
+
+
+def test_the_default_progress_hook_computes_in_progress_pieces(grasp):
+    from exactgrasp.backends.base import PROGRESS_PIECES
+
+    backend = CountingBackend()
+    poses = translations(*[(x, 0, 0) for x in np.linspace(-1, 1, 100)])
+    done: list[int] = []
+    volumes = backend.volumes_with_progress(grasp, poses, done.append)
+    assert PROGRESS_PIECES == 20
+    assert done == [5] * 20 and [len(p) for p in backend.received] == [5] * 20
+    np.testing.assert_array_equal(volumes, poses[:, 0, 3] ** 2)
+    backend = CountingBackend()
+    np.testing.assert_array_equal(backend.volumes_with_progress(grasp, poses), volumes)
+    assert [len(p) for p in backend.received] == [100]  # no hook: one call

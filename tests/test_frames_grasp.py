@@ -1,4 +1,5 @@
 import json
+import re
 
 import numpy as np
 import pytest
@@ -100,6 +101,71 @@ def test_grasp_rejects_non_rigid_pose():
         eg.Grasp(hand, obj, np.diag([2.0, 2.0, 2.0, 1.0]))
     with pytest.raises(eg.GraspFileError, match="must be a 4x4 matrix"):
         eg.Grasp(hand, obj, np.eye(3))
+
+
+@pytest.mark.parametrize(
+    ("pose", "defect"),
+    [
+        (np.diag([-1.0, 1.0, 1.0, 1.0]), r"its rotation part has determinant -1 \(a reflection\)"),
+        (
+            np.diag([1000.0, 1000.0, 1000.0, 1.0]),
+            r"its rotation part is not orthonormal \(max \|R\^T R - I\| = 1e\+06: a scale or a "
+            r"shear\)",
+        ),
+        (
+            np.array([[1, 0.01, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]]),
+            r"its rotation part is not orthonormal \(max \|R\^T R - I\| = 0\.01: a scale or a "
+            r"shear\)",
+        ),
+        (
+            np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0.5, 1.0]]),
+            r"its last row is \[0\.0, 0\.0, 0\.5, 1\.0\], not \[0, 0, 0, 1\]",
+        ),
+    ],
+    ids=["reflection", "scale", "shear", "last row"],
+)
+def test_non_rigid_object_pose_says_what_is_wrong_and_the_fix(pose, defect):
+    hand = two_link_hand()
+    obj = eg.Solid(*box_arrays([0, 0, 0], [0.01, 0.01, 0.01]))
+    with pytest.raises(eg.GraspFileError) as info:
+        eg.Grasp(hand, obj, pose)
+    message = str(info.value)
+    assert re.match(
+        r"object_pose is not a rigid transform: " + defect + r"\. Give a rotation", message
+    )
+    assert "a mesh in other units takes Solid(..., units=...), not a scale in the pose" in message
+    assert message.endswith("and a mirrored object a mirrored mesh.")
+
+
+def test_pose_tolerance_is_1e_5_on_the_determinant_too():
+    hand = two_link_hand()
+    obj = eg.Solid(*box_arrays([0, 0, 0], [0.01, 0.01, 0.01]))
+    pose = np.eye(4)
+    pose[:3, :3] *= 1 + 4e-6  # R^T R - I = 8e-6, det - 1 = 1.2e-5: the determinant decides
+    with pytest.raises(eg.GraspFileError, match=r"determinant 1\.0000120000\d*, not 1"):
+        eg.Grasp(hand, obj, pose)
+    pose[:3, :3] = np.eye(3) * (1 + 3e-6)
+    assert np.array_equal(eg.Grasp(hand, obj, pose).object_pose, pose)
+
+
+def test_grasp_keeps_its_own_copy_of_the_pose():
+    hand = two_link_hand()
+    obj = eg.Solid(*box_arrays([0, 0, 0], [0.01, 0.01, 0.01]))
+    pose = np.eye(4)
+    grasp = eg.Grasp(hand, obj, pose)
+    key = grasp.object_key
+    pose[0, 3] = 0.5
+    assert grasp.object_pose[0, 3] == 0.0
+    assert eg.Grasp(hand, obj, np.eye(4)).object_key == key
+
+
+def test_authors_scale_reproduces_their_frame():
+    # The authors' code scaled the Barrett hand by 5.15568 instead of 2 / depth.
+    frame = eg.HandFrame.from_palm([0, 0, 0.08], [0, 0, 1], [0, 1, 0], 0.085, scale=5.15568)
+    assert frame.scale == 5.15568
+    np.testing.assert_allclose(frame.apply([0, 0, 0.1225]), 0.0, atol=1e-15)
+    np.testing.assert_allclose(frame.apply([0, 0.1, 0.1225]), [0, 0.515568, 0], atol=1e-15)
+    assert eg.HandFrame.from_dict(frame.to_dict()).scale == 5.15568
 
 
 def test_grasp_file_round_trip_bit_exact(tmp_path):

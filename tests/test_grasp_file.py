@@ -287,6 +287,38 @@ def test_own_notes_and_the_shared_data_keys_are_accepted(grasp_file):
     assert eg.Grasp.from_file(write(path, data)).name == "g"
 
 
+def test_own_notes_and_informational_keys_are_not_written_back(grasp_file, tmp_path):
+    path, data = grasp_file
+    written = set(data)
+    data["x-recorded-by"] = {"rig": 2}
+    data["contact_links"] = ["finger_1_dist"]
+    data["checks"] = {"hand_object_intersection_m3": 0.0}
+    again = json.loads(
+        eg.Grasp.from_file(write(path, data)).save(tmp_path / "again.json").read_text()
+    )
+    assert set(again) == written
+    assert "x-recorded-by" not in again and "checks" not in again
+
+
+def test_non_rigid_pose_in_a_file_names_the_key_and_object_units(grasp_file):
+    path, data = grasp_file
+    data["object_pose_in_hand"] = [
+        [1000, 0, 0, 0],
+        [0, 1000, 0, 0],
+        [0, 0, 1000, 0.1],
+        [0, 0, 0, 1],
+    ]
+    with pytest.raises(GraspFileError) as info:
+        eg.Grasp.from_file(write(path, data))
+    message = str(info.value)
+    assert message.startswith(
+        f"{path}: object_pose_in_hand is not a rigid transform: its rotation part is not "
+        "orthonormal (max |R^T R - I| = 1e+06: a scale or a shear)."
+    )
+    assert 'a mesh in other units takes "object_units" in the grasp file, not a scale' in message
+    assert "units=" not in message and "Solid(" not in message
+
+
 @pytest.mark.parametrize(
     ("edit", "message"),
     [

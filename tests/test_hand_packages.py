@@ -234,6 +234,27 @@ def test_open_mesh_repaired(tmp_path):
     assert hand.source["options"] == {"repair": True}
 
 
+def test_a_mesh_geom_repair_cannot_close_is_named(tmp_path):
+    pytest.importorskip("pymeshfix", reason="repair needs the repair extra (pymeshfix)")
+    # A tetrahedron missing a face, and a lone triangle beside it: nothing closes the triangle.
+    (tmp_path / "torn.obj").write_text(
+        "v 0 0 0\nv 0.01 0 0\nv 0 0.01 0\nv 0 0 0.01\nv 0.05 0 0\nv 0.06 0 0\n"
+        "v 0.05 0.01 0.002\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 5 6 7\n"
+    )
+    path = tmp_path / "torn.xml"
+    path.write_text(
+        '<mujoco><asset><mesh name="torn" file="torn.obj"/></asset><worldbody><body name="palm">'
+        '<geom name="palm_shell" type="mesh" mesh="torn"/></body></worldbody></mujoco>'
+    )
+    with pytest.raises(ModelError) as info, np.errstate(invalid="ignore", divide="ignore"):
+        load_model(path, repair=True, palm=False)
+    message = str(info.value)
+    assert message.startswith(
+        f"{path}: mesh geom 'palm_shell' of body 'palm': repair=True could not close the surface"
+    )
+    assert "fix the mesh in a modeller (e.g. MeshLab, Blender's 3D-print toolbox)" in message
+
+
 def test_open_mesh_outside_root_body_does_not_stop_the_load(tmp_path):
     # The arm link ("mount") carries the open mesh too; only the hand's subtree is checked.
     path = _open_hand(tmp_path, outer_geom='<geom name="arm_shell" type="mesh" mesh="shell"/>')
@@ -339,7 +360,17 @@ def test_inspect_scene_and_package(tmp_path, capsys, no_env):
     pkg = _package(tmp_path / "ws")
     urdf = _elsewhere(tmp_path, pkg)
     assert main(["inspect", str(urdf)]) == 2
-    assert PALM_URI in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert PALM_URI in err
+    # The command names its flag, not load_model's package_dirs argument.
+    assert "Searched --package-dir (not given)" in err
+    assert "Pass --package-dir my_hand=/path/to/my_hand or --package-dir /folder/holding" in err
+    assert "package_dirs" not in err
+    assert main(["inspect", str(urdf), "--package-dir", f"my_hand={tmp_path / 'none'}"]) == 2
+    err = capsys.readouterr().err
+    assert (
+        f"--package-dir my_hand={tmp_path / 'none'}: '{tmp_path / 'none'}' is not a folder" in err
+    )
     assert main(["inspect", str(urdf), "--package-dir", f"my_hand={pkg}"]) == 0
     assert "joint 'knuckle': hinge" in capsys.readouterr().out
 

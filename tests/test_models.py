@@ -2,10 +2,12 @@
 
 import gzip
 import json
+import re
 import warnings
 
 import numpy as np
 import pytest
+import trimesh
 
 pytest.importorskip("mujoco", reason="the models extra (mujoco) is not installed")
 
@@ -219,6 +221,87 @@ def test_no_geometry_and_bad_options(tmp_path):
         load_model(path, root_body="hand", palm={"normal": "+z", "up": "+z", "depth": 0.1})
 
 
+def _mjcf(body: str, asset: str = "") -> str:
+    """A model of one top-level body holding ``body``."""
+    return f"<mujoco><asset>{asset}</asset><worldbody>{body}</worldbody></mujoco>"
+
+
+BOX_GEOM = '<geom type="box" size="0.01 0.01 0.01"{}/>'
+
+
+@pytest.mark.filterwarnings("ignore:.*left out of the hand")
+def test_no_geometry_says_what_to_do(tmp_path):
+    visual = BOX_GEOM.format(' contype="0" conaffinity="0"')
+    path = _write(tmp_path, _mjcf(f'<body name="b">{visual}</body>'), "visual.xml")
+    with pytest.raises(
+        ModelError,
+        match=r"visual\.xml: no collision geometry in the hand's subtree \(root 'world'\); 1 "
+        r"geom\(s\) of the other kind exist: try geometry='all'$",
+    ):
+        load_model(path, palm=False)
+    assert load_model(path, palm=False, geometry="all").link_names == ("b",)
+    body = f'<body name="mount"><body name="hand"/>{BOX_GEOM.format("")}</body>'
+    path = _write(tmp_path, _mjcf(body), "split.xml")
+    with pytest.raises(
+        ModelError,
+        match=r"no collision geometry in the hand's subtree \(root 'hand'\); pass root_body= "
+        r"naming the body whose subtree holds the hand's geoms$",
+    ):
+        load_model(path, root_body="hand", palm=False)
+    path = _write(tmp_path, _mjcf('<body name="b"><site name="s"/></body>'), "empty.xml")
+    with pytest.raises(
+        ModelError,
+        match=r"\(root 'world'\); the model has no solid geom \(box, sphere, capsule, cylinder, "
+        r"ellipsoid or mesh\): add the hand's geoms to the model file$",
+    ):
+        load_model(path, palm=False)
+
+
+def test_missing_model_file_names_it_and_where_relative_paths_start(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(
+        ModelError,
+        match=r"^hand model file 'hands/nowhere\.urdf' does not exist; check the path \(a "
+        rf"relative path is resolved from {re.escape(str(tmp_path))}\)$",
+    ):
+        load_model("hands/nowhere.urdf")
+
+
+def test_a_model_mujoco_cannot_compile_gives_mujocos_message(tmp_path):
+    bad = _write(
+        tmp_path, _mjcf('<body name="b"><geom type="box" size="-1 1 1"/></body>'), "bad.xml"
+    )
+    with pytest.raises(ModelError, match=r"bad\.xml: mujoco cannot compile the model: Error: "):
+        load_model(bad, palm=False)
+    torn = _write(tmp_path, '<mujoco><worldbody><body name="b">', "torn.xml")
+    with pytest.raises(ModelError, match=r"torn\.xml: mujoco cannot compile the model: XML parse"):
+        load_model(torn, palm=False)
+
+
+def test_inside_out_mesh_geom_is_flipped_with_a_warning(tmp_path):
+    box = trimesh.creation.box((0.02, 0.03, 0.04))
+    trimesh.Trimesh(box.vertices, box.faces[:, ::-1], process=False).export(tmp_path / "inv.stl")
+    body = '<body name="b"><geom name="g" type="mesh" mesh="m"/></body>'
+    path = _write(tmp_path, _mjcf(body, '<mesh name="m" file="inv.stl"/>'), "inv.xml")
+    with pytest.warns(UserWarning, match=r"mesh geom 'g' of body 'b' is inside-out \(negative "
+                      r"volume\); its faces were flipped"):  # fmt: skip
+        model = load_model(path, palm=False)
+    ((_, V, F),) = model.link_meshes({})
+    assert trimesh.Trimesh(V, F, process=False).volume == pytest.approx(2.4e-5, rel=1e-6)
+
+
+def test_slide_joint_limit_slack_is_1e_5_metres(tmp_path):
+    finger = '<joint name="s" type="slide" axis="0 1 0" range="0 0.04"/>' + BOX_GEOM.format("")
+    body = (
+        f'<body name="b">{BOX_GEOM.format("")}<body name="f" pos="0 0.05 0">{finger}</body></body>'
+    )
+    model = load_model(_write(tmp_path, _mjcf(body), "slide.xml"), palm=False)
+    assert model.check_joints({"s": 0.04 + 0.9e-5}) == {"s": 0.04 + 0.9e-5}  # kept as given
+    with pytest.raises(JointError, match=r"'s' = 0\.040011 is outside its limits \[0\.0, 0\.04\] "
+                       r"\(tolerance 1e-05\); pass on_limit='clip'"):  # fmt: skip
+        model.check_joints({"s": 0.04 + 1.1e-5})
+
+
 def test_open_mesh_is_refused(tmp_path):
     # A tetrahedron with one face missing: mujoco compiles it, it is not a closed solid.
     (tmp_path / "open.obj").write_text(
@@ -269,6 +352,17 @@ def test_builtin_barrett_model():
     assert model.check_joints({"finger_1_prox_joint": 0.6, "finger_2_prox_joint": 0.6})
     with pytest.raises(JointError, match="coupling"):
         model.check_joints({"finger_1_prox_joint": 0.6, "finger_2_prox_joint": 0.2})
+
+
+def test_builtin_barrett_volumes():
+    # A 90 x 90 x 80 mm palm box; the whole hand (union of its links) 856 cm^3.
+    import exactgrasp.hands as hands
+
+    hand = hands.barrett()
+    palm_v, palm_f = hand.link_arrays()[hand.link_names.index("palm")]
+    assert trimesh.Trimesh(palm_v, palm_f, process=False).volume == pytest.approx(648e-6, rel=1e-9)
+    assert np.ptp(palm_v, axis=0) == pytest.approx((0.09, 0.09, 0.08))
+    assert hand.volume == pytest.approx(856e-6, rel=5e-4)
 
 
 def test_builtin_barrett_distal_coupling():

@@ -178,6 +178,17 @@ def test_units_of_files_in_millimetres(tmp_path):
         intersection_volume(a_mm, b, pose)
 
 
+def test_units_are_not_applied_to_a_solid():
+    """A Solid is already in metres: units= converts the other inputs only."""
+    a_mm = box_arrays([0, 0, 0], [100, 100, 100])  # a 0.1 m cube written in millimetres
+    b = eg.Solid(*box_arrays([0, 0, 0], [0.05, 0.05, 0.05]))
+    pose = translation(0.07, 0.07, 0.07)
+    assert intersection_volume(a_mm, b, pose, units="mm") == pytest.approx(0.03**3, rel=1e-12)
+    assert intersection_volume(a_mm, b, pose, units=("mm", "mm")) == pytest.approx(
+        0.03**3, rel=1e-12
+    )
+
+
 def test_repair_closes_an_open_mesh():
     V, F = box_arrays([0, 0, 0], [0.1, 0.1, 0.1])
     b = box_arrays([0.05, 0.05, 0.05], [0.2, 0.2, 0.2])

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from exactgrasp.errors import MeshError
 from exactgrasp.geometry import primitives
 
 
@@ -66,16 +67,44 @@ def test_vertices_lie_on_the_surface():
 
 
 @pytest.mark.parametrize(
-    "call",
+    ("call", "message"),
     [
-        lambda: primitives.box((1, 0, 1)),
-        lambda: primitives.box((1, 1)),
-        lambda: primitives.sphere(-1.0),
-        lambda: primitives.cylinder(1.0, math.nan),
-        lambda: primitives.capsule(1.0, 1.0, segments=3),
-        lambda: primitives.ellipsoid((1, 1, 1), segments=8.5),
+        (
+            lambda: primitives.box((1, 0, 1)),
+            r"half_extents must be finite and > 0, got \(1, 0, 1\)",
+        ),
+        (lambda: primitives.box((1, 1)), r"half_extents must have 3 values, got shape \(2,\)"),
+        (
+            lambda: primitives.sphere(-1.0),
+            r"radii must be finite and > 0, got \(-1\.0, -1\.0, -1\.0\)",
+        ),
+        (
+            lambda: primitives.cylinder(1.0, math.nan),
+            r"half_height must be finite and > 0, got nan",
+        ),
+        (
+            lambda: primitives.capsule(1.0, 1.0, segments=3),
+            r"segments must be an integer >= 4, got 3",
+        ),
+        (
+            lambda: primitives.ellipsoid((1, 1, 1), segments=8.5),
+            r"segments must be an integer >= 4, got 8\.5",
+        ),
     ],
 )
-def test_bad_parameters(call):
-    with pytest.raises(ValueError):
+def test_bad_parameters(call, message):
+    with pytest.raises(MeshError, match=f"^{message}$"):
         call()
+
+
+def test_volume_errors_at_32_and_64_segments():
+    """The figures of the hand-model docs: the inscribed meshes' volume errors."""
+    errors = {}
+    for name, (build, exact) in SHAPES.items():
+        errors[name] = [(_volume(*build(n)) - exact) / exact for n in (32, 64)]
+    assert errors["sphere"] == pytest.approx([-0.016, -0.004], abs=1e-4)
+    assert errors["ellipsoid"] == pytest.approx(errors["sphere"], abs=1e-12)
+    assert errors["cylinder"] == pytest.approx([-0.0064, -0.0016], abs=1e-4)
+    # A capsule is a cylinder with a sphere's ends: between the two.
+    for k in (0, 1):
+        assert errors["sphere"][k] < errors["capsule"][k] < errors["cylinder"][k]

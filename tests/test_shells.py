@@ -261,3 +261,79 @@ def test_resolve_shells_keeps_one_clean_shell_as_is():
     out_v, out_f, report = resolve_shells(v, f, "box")
     assert out_v is v and out_f is f
     assert report["n_shells"] == 1 and report["actions"] == []
+
+
+def reversed_box(lo, hi):
+    v, f = box_arrays(lo, hi)
+    return v, f[:, ::-1].copy()
+
+
+def test_island_inside_a_cavity_is_kept_as_given():
+    v, f = two_shells(
+        box_arrays([0, 0, 0], [1, 1, 1]),
+        reversed_box([0.2, 0.2, 0.2], [0.8, 0.8, 0.8]),
+        box_arrays([0.4, 0.4, 0.4], [0.6, 0.6, 0.6]),
+    )
+    solid, messages = recorded(lambda: Solid(v, f, name="nested"))
+    assert messages == []
+    np.testing.assert_array_equal(solid.faces, f)
+    assert solid.volume == pytest.approx(1 - 0.216 + 0.008, abs=1e-14)
+    assert [s["role"] for s in solid.shell_report["shells"]] == ["outer", "cavity", "island"]
+
+
+def test_overlapping_islands_inside_a_cavity_are_merged():
+    v, f = two_shells(
+        box_arrays([0, 0, 0], [1, 1, 1]),
+        reversed_box([0.1, 0.1, 0.1], [0.9, 0.9, 0.9]),
+        box_arrays([0.2, 0.2, 0.2], [0.5, 0.5, 0.5]),
+        box_arrays([0.4, 0.4, 0.4], [0.7, 0.7, 0.7]),
+    )
+    solid, messages = recorded(lambda: Solid(v, f, name="islands"))
+    assert solid.volume == pytest.approx(1 - 0.512 + 2 * 0.027 - 0.001, abs=1e-12)
+    assert len(messages) == 1 and "merged shells 2 (8 vertices), 3 (8 vertices)" in messages[0]
+
+
+@pytest.mark.parametrize(
+    ("boxes", "why"),
+    [
+        (
+            # Inside an outer box: an outward box crossed by a reversed one.
+            [
+                ((0, 0, 0), (3, 3, 3), 1),
+                ((1, 1, 1), (2, 2, 2), 1),
+                ((1.5, 1.2, 1.2), (2.5, 1.8, 1.8), -1),
+            ],
+            r"shells 1 \(8 vertices\), 2 \(8 vertices\) mix crossing outward and reversed shells "
+            r"inside another shell",
+        ),
+        (
+            # Two overlapping outward boxes, and a reversed one crossing both.
+            [
+                ((0, 0, 0), (1, 1, 1), 1),
+                ((0.5, 0.1, 0.1), (1.5, 0.9, 0.9), 1),
+                ((0.8, 0.3, 0.3), (1.7, 0.7, 0.7), -1),
+            ],
+            r"shells 0 \(8 vertices\), 1 \(8 vertices\), 2 \(8 vertices\) mix reversed shells "
+            r"with outward shells that overlap",
+        ),
+    ],
+    ids=["inside another shell", "overlapping outward shells"],
+)
+def test_combinations_not_resolved_are_refused_with_the_fix(boxes, why):
+    v, f = two_shells(
+        *(box_arrays(lo, hi) if s > 0 else reversed_box(lo, hi) for lo, hi, s in boxes)
+    )
+    with pytest.raises(
+        MeshError,
+        match=rf"^combo: {why}; the solid they bound is not resolved here\. Make every body one "
+        r"outward closed shell .*Blender's Boolean modifier",
+    ):
+        Solid(v, f, name="combo")
+
+
+def test_repair_does_not_fix_a_shell_that_crosses_itself():
+    v, f = folded_box()
+    with pytest.raises(
+        MeshError, match=r"^folded\.stl: the surface .* crosses itself: .*modeller"
+    ):
+        Solid(v, f, name="folded.stl", repair=True)

@@ -151,3 +151,27 @@ def test_repair_of_an_open_box_is_reported(tmp_path):
     assert solid.volume == pytest.approx(1e-3, rel=1e-6)
     assert solid.repair_report["actions"] == ["filled holes (trimesh)"]
     assert solid.repair_report["volume_before"] == pytest.approx(0.75e-3, rel=1e-6)
+
+
+def test_a_mesh_repair_cannot_close_is_refused_naming_it_and_the_fix():
+    pytest.importorskip("pymeshfix", reason="repair needs the repair extra (pymeshfix)")
+    triangle = np.array([[0.0, 0, 0], [0.01, 0, 0], [0, 0.01, 0]])
+    # np.errstate: trimesh divides by the zero area of what pymeshfix leaves of the sheet.
+    with pytest.raises(MeshError) as info, np.errstate(invalid="ignore", divide="ignore"):
+        Solid(triangle, np.array([[0, 1, 2]]), name="sheet.stl", repair=True)
+    message = str(info.value)
+    assert message.startswith("sheet.stl: repair=True could not close the surface (after: ")
+    assert "closed with pymeshfix" in message
+    assert message.endswith(
+        "fix the mesh in a modeller (e.g. MeshLab, Blender's 3D-print toolbox)."
+    )
+
+
+def test_the_plausible_size_is_5_metres():
+    # The longest side decides: 4.99 m is taken as metres, 5.01 m is refused as millimetres.
+    v, f = box_arrays([0, 0, 0], [4.99, 0.1, 0.1])
+    assert Solid(v, f).extent == pytest.approx(4.99)
+    v, f = box_arrays([0, 0, 0], [5.01, 0.1, 0.1])
+    with pytest.raises(MeshError, match=r"^<array mesh>: 5\.01 m long in units='m', too large"):
+        Solid(v, f)
+    assert Solid(v, f, units="mm").extent == pytest.approx(5.01e-3)

@@ -163,3 +163,35 @@ def test_validate_is_listed_in_the_command(capsys):
         main(["validate", "--help"])
     out = capsys.readouterr().out
     assert "--quick" in out and "--data" in out
+
+
+def test_descriptor_cache_never_reads_a_file_of_other_settings(tmp_path):
+    import exactgrasp as eg
+    from exactgrasp.report.cache import DescriptorCache
+    from tests.conftest import box_arrays
+
+    hand = eg.Hand.from_meshes(
+        [box_arrays([-0.05, -0.05, 0.0], [0.05, 0.05, 0.02])],
+        frame=eg.HandFrame.from_palm([0, 0, 0.02], [0, 0, 1], [0, 1, 0], 0.08),
+    )
+    pose = np.eye(4)
+    pose[2, 3] = 0.0295  # 0.5 mm into the slab
+    grasp = eg.Grasp(hand, eg.objects.box((0.02, 0.02, 0.02)), pose, name="slab")
+    sampler = eg.PathSampler(2, 1, 2, n_steps=2)
+    cache = DescriptorCache(tmp_path)
+    first = cache.descriptor(grasp, sampler, "voxel", object_resolution=12, hand_resolution=20)
+    again = cache.descriptor(grasp, sampler, "voxel", object_resolution=12, hand_resolution=20)
+    assert (cache.computed, cache.loaded) == (1, 1)
+    assert np.array_equal(again.values, first.values)
+    # Any setting that changes the values is a new file; the sampler too; n_jobs is not.
+    cache.descriptor(grasp, sampler, "voxel", object_resolution=13, hand_resolution=20)
+    longer = eg.PathSampler(2, 1, 2, n_steps=3)
+    cache.descriptor(grasp, longer, "voxel", object_resolution=12, hand_resolution=20)
+    shifted = pose.copy()
+    shifted[0, 3] = 0.001
+    moved = eg.Grasp(hand, grasp.object, shifted, name="slab")
+    cache.descriptor(moved, sampler, "voxel", object_resolution=12, hand_resolution=20)
+    assert (cache.computed, cache.loaded) == (4, 1)
+    exact = cache.backend("exact", n_jobs=1)
+    assert cache.path(grasp, exact, sampler) == cache.path(grasp, cache.backend("exact"), sampler)
+    assert len(list((tmp_path / "voxel").glob("*.npz"))) == 4

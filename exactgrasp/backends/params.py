@@ -98,6 +98,10 @@ class Interval:
         return f"{article} {noun}"
 
 
+#: What `Options.listed` gives for a value that is not listed.
+_UNLISTED = object()
+
+
 class Options:
     """One of a few listed values (compared by equality; a bool never stands for 0 or 1).
 
@@ -113,17 +117,23 @@ class Options:
         self.values = tuple(values)
 
     def __call__(self, value: Any) -> bool:
+        return self.listed(value) is not _UNLISTED
+
+    def listed(self, value: Any) -> Any:
+        """The listed option equal to ``value`` (so a numpy scalar comes back as the plain value
+        listed), or ``_UNLISTED``."""
+        flag = isinstance(value, bool | np.bool_)  # numpy's bools are no ints either
         for option in self.values:
-            if isinstance(value, bool) != isinstance(option, bool):
+            if flag != isinstance(option, bool | np.bool_):
                 continue
             if isinstance(value, str) != isinstance(option, str):
                 continue
             try:
                 if value == option:
-                    return True
+                    return option
             except (TypeError, ValueError):  # an array compares element-wise
                 continue
-        return False
+        return _UNLISTED
 
     def alternatives(self) -> list[str]:
         """Each option as messages write it."""
@@ -238,6 +248,8 @@ def validate_parameters(
             raise BackendError(f"{owner}: {name} must be {describe(param)}, got {value!r}{hint}.")
         if isinstance(match, Interval):
             value = match.cast(value)
+        elif isinstance(match, Options):
+            value = match.listed(value)
         elif match == "boolean":
             value = bool(value)
         out[name] = value

@@ -1,10 +1,11 @@
 """``exactgrasp batch``: the command-line face of `exactgrasp.batch.run_batch`.
 
-The grasp files of a manifest are read as they say (``run_batch`` takes no unit or repair
-overrides), so this command has ``--on-limit`` but no ``--units``/``--repair``.
+``--units``, ``--repair`` and ``--on-limit`` replace what every grasp file of the manifest says,
+as `run_batch`'s ``units``, ``repair`` and ``on_limit`` do; errors name the flags, not those
+arguments.
 
-May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.batch` (pyarrow and
-distributed load only when a batch runs).
+May import: `exactgrasp.errors`, `exactgrasp.cli.common`, `exactgrasp.cli.params`,
+`exactgrasp.batch` (pyarrow and distributed load only when a batch runs).
 """
 
 from __future__ import annotations
@@ -19,11 +20,25 @@ from exactgrasp.cli.common import (
     add_grasp_options,
     add_progress,
     add_sampler,
+    flag_message,
+    renamed,
     sampler_from_args,
 )
 from exactgrasp.cli.params import add_param, build_backend, split_params
+from exactgrasp.errors import BatchError
 
-__all__ = ["add_parser", "cmd_batch"]
+__all__ = ["BATCH_FLAGS", "add_parser", "cmd_batch"]
+
+#: `run_batch`'s spellings of its arguments in messages, and the flags that set them here.
+BATCH_FLAGS = (
+    (
+        "workers= sets up a local cluster; with scheduler= use its workers.",
+        "--workers sets up a local cluster; with --scheduler the cluster's own workers "
+        "compute: leave --workers out.",
+    ),
+    ("workers must be an integer >= 0, got", "--workers must be an integer >= 0, got"),
+    ("part_size must be an integer >= 1, got", "--part-size must be an integer >= 1, got"),
+)
 
 
 def cmd_batch(args: argparse.Namespace) -> int:
@@ -31,7 +46,20 @@ def cmd_batch(args: argparse.Namespace) -> int:
     sampler = sampler_from_args(args)
     params = split_params(args.param, [args.backend])[args.backend]
     build_backend(args.backend, params)  # refuses bad parameters before any work starts
-    summary = run_batch(
+    try:
+        summary = _run(args, sampler, params)
+    except BatchError as exc:
+        message = flag_message(str(exc), BATCH_FLAGS)
+        if message == str(exc):
+            raise
+        raise renamed(exc, message) from exc
+    print(summary.text(), file=sys.stdout)
+    return summary.exit_status
+
+
+def _run(args: argparse.Namespace, sampler, params: dict):
+    """`run_batch` with the command's arguments."""
+    return run_batch(
         args.manifest,
         args.out,
         backend=args.backend,
@@ -46,8 +74,6 @@ def cmd_batch(args: argparse.Namespace) -> int:
         units=args.units,
         repair=args.repair,
     )
-    print(summary.text(), file=sys.stdout)
-    return summary.exit_status
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:

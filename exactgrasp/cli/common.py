@@ -68,6 +68,10 @@ FILE_KEYS_TO_FLAGS = (
     *(f for u in UNITS for f in _file_key_fixes("object_units", json.dumps(u), f"--units {u}")),
     *_file_key_fixes("object_repair", "true", "--repair"),
     *_file_key_fixes("on_limit", '"clip"', "--on-limit clip"),
+    (
+        'takes "object_units" in the grasp file',
+        'takes --units (or "object_units" in the grasp file)',
+    ),
     *PYTHON_TO_FLAGS,
 )
 

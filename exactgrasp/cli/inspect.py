@@ -14,6 +14,7 @@ May import: `exactgrasp.errors`, `exactgrasp.hands` (builtins, hand, loading, sc
 from __future__ import annotations
 
 import argparse
+import re
 import warnings
 from pathlib import Path
 from typing import Any
@@ -26,6 +27,22 @@ from exactgrasp.hands.loading import compile_source, load_model
 from exactgrasp.hands.scene import body_tree
 
 __all__ = ["add_parser", "cmd_inspect", "inspect_lines", "package_dirs_from_args"]
+
+#: `load_model`'s spellings of ``package_dirs`` in messages, and the flag that sets it here.
+PACKAGE_DIR_FLAG = (
+    (re.compile(r"package_dirs=\{'([^']*)': '([^']*)'\}"), r"--package-dir \1=\2"),
+    (re.compile(r"package_dirs=\['([^']*)'\]"), r"--package-dir \1"),
+    (re.compile(r"package_dirs\['([^']*)'\] '([^']*)'"), r"--package-dir \1=\2: '\2'"),
+    (re.compile(r"package_dirs entry|package_dirs\b"), "--package-dir"),
+)
+
+
+def _flag_spelling(exc: ExactGraspError) -> ExactGraspError:
+    """``exc`` with ``package_dirs=...`` spelled as the ``--package-dir`` flag."""
+    message = str(exc)
+    for pattern, flag in PACKAGE_DIR_FLAG:
+        message = pattern.sub(flag, message)
+    return type(exc)(message) if message != str(exc) else exc
 
 
 def package_dirs_from_args(values: list[str] | None) -> Any:
@@ -116,7 +133,11 @@ def _xyz(values) -> str:
 def cmd_inspect(args: argparse.Namespace) -> int:
     """Handler of ``exactgrasp inspect``; prints the tree, returns 0."""
     dirs = package_dirs_from_args(args.package_dir)
-    for line in inspect_lines(args.model, args.geometry, dirs, args.root_body):
+    try:
+        lines = inspect_lines(args.model, args.geometry, dirs, args.root_body)
+    except ModelError as exc:
+        raise _flag_spelling(exc) from exc
+    for line in lines:
         print(line)
     return 0
 

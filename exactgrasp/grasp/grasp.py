@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.errors import GraspFileError
-from exactgrasp.geometry.se3 import is_rigid
+from exactgrasp.geometry.se3 import is_rigid, rigid_defects
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.grasp.files import read_hand, read_object, write_hand, write_object
 from exactgrasp.grasp.schema import check_grasp_data
@@ -34,9 +34,14 @@ __all__ = ["FORMAT", "Grasp", "check_pose"]
 
 #: The ``format`` tag of grasp files written here.
 FORMAT = "exactgrasp.grasp/1"
+#: Tolerance of `check_pose` on ``R^T R = I``, ``det R = 1`` and the last row, loose enough for
+#: a rotation written out to six decimals.
+POSE_ATOL = 1e-5
 
 
-def check_pose(pose: Any, name: str = "object_pose") -> np.ndarray:
+def check_pose(
+    pose: Any, name: str = "object_pose", units: str = "Solid(..., units=...)"
+) -> np.ndarray:
     """Validate a rigid 4x4 transform.
 
     Parameters
@@ -44,20 +49,37 @@ def check_pose(pose: Any, name: str = "object_pose") -> np.ndarray:
     pose : array_like, shape (4, 4)
     name : str
         Used in the message.
+    units : str
+        Where the caller sets the object's length unit, for the message (a scale belongs
+        there, not in the pose).
 
     Returns
     -------
     numpy.ndarray, shape (4, 4), float64
     """
-    arr = np.asarray(pose, dtype=np.float64)
+    arr = np.array(pose, dtype=np.float64)  # a copy: the caller's array may change later
     if arr.shape != (4, 4):
         raise GraspFileError(f"{name} must be a 4x4 matrix, got shape {arr.shape}.")
     if not np.all(np.isfinite(arr)):
         raise GraspFileError(f"{name} contains NaN or infinite entries.")
-    if not is_rigid(arr, atol=1e-5):
+    if not is_rigid(arr, atol=POSE_ATOL):
+        orthonormality, determinant, last_row = (float(x) for x in rigid_defects(arr))
+        if last_row > POSE_ATOL:
+            what = f"its last row is {arr[3].tolist()}, not [0, 0, 0, 1]"
+        elif determinant < 0:
+            what = f"its rotation part has determinant {determinant:.6g} (a reflection)"
+        elif orthonormality > POSE_ATOL:
+            what = (
+                f"its rotation part is not orthonormal (max |R^T R - I| = {orthonormality:.3g}: "
+                "a scale or a shear)"
+            )
+        else:
+            what = f"its rotation part has determinant {determinant:.15g}, not 1"
         raise GraspFileError(
-            f"{name} is not a rigid transform (rotation part not orthonormal with det +1, or "
-            "last row not 0 0 0 1); scale the object with units=..., not with the pose."
+            f"{name} is not a rigid transform: {what}. Give a rotation (orthonormal, "
+            f"determinant +1, to {POSE_ATOL:g}) and a translation in metres, last row 0 0 0 1; "
+            f"a mesh in other units takes {units}, not a scale in the pose, and a mirrored "
+            "object a mirrored mesh."
         )
     return arr
 
@@ -212,7 +234,11 @@ class Grasp:
         check_grasp_data(data, source)
         obj = read_object(data, base_dir, source, overrides)
         hand = read_hand(data, base_dir, source, overrides)
-        pose = check_pose(data["object_pose_in_hand"], f"{source}: object_pose_in_hand")
+        pose = check_pose(
+            data["object_pose_in_hand"],
+            f"{source}: object_pose_in_hand",
+            units='"object_units" in the grasp file',
+        )
         return cls(hand, obj, pose, name=data.get("name", Path(source).stem))
 
     def to_dict(self, base_dir: str | os.PathLike = ".", sidecar_stem: str = "grasp") -> dict:

@@ -258,7 +258,15 @@ def collect_geoms(
     if notes:
         warn_caller(f"{source}: geoms left out of the hand: " + "; ".join(notes))
     if not kept:
-        hint = f"; {other} geom(s) of the other kind exist: try geometry='all'" if other else ""
+        if other:
+            hint = f"; {other} geom(s) of the other kind exist: try geometry='all'"
+        elif root or outside:
+            hint = "; pass root_body= naming the body whose subtree holds the hand's geoms"
+        else:
+            hint = (
+                "; the model has no solid geom (box, sphere, capsule, cylinder, ellipsoid or "
+                "mesh): add the hand's geoms to the model file"
+            )
         raise ModelError(
             f"{source}: no {geometry} geometry in the hand's subtree "
             f"(root {body_names[root]!r}){hint}"

@@ -137,7 +137,8 @@ def compile_source(
     path = Path(path)
     source = str(path)
     if xml is None and not path.is_file():
-        raise ModelError(f"hand model file {source!r} does not exist")
+        where = "" if path.is_absolute() else f" (a relative path is resolved from {Path.cwd()})"
+        raise ModelError(f"hand model file {source!r} does not exist; check the path{where}")
     resolver = PackageResolver(path, package_dirs, source)
     if path.suffix.lower() == ".urdf":
         if xml is not None:
