@@ -114,6 +114,42 @@ def test_coincident_faces_fall_back_to_the_boolean():
     assert ex.stats["poses_boolean"] == 2
 
 
+def test_pose_sources_and_bounds_say_where_each_volume_came_from():
+    hand = [box([0, 0, 0], [1, 1, 1])]
+    obj = [sphere(0.3, np.zeros(3), 2)]
+    P = np.tile(np.eye(4), (3, 1, 1))
+    P[0, :3, 3] = [0.5, 0.5, 0.5]  # inside the hand: the kernel
+    P[1, :3, 3] = [0.5, 0.5, 5.0]  # far away: culled, exactly 0
+    # At the corner, where the sphere's vertices lie on the box's face planes: the boolean.
+    ex = ExactIntersector(hand, obj, broadphase="coal")
+    got = ex.volumes(P)
+    ex2 = ExactIntersector(hand, [box([0, 0, 0], [1, 1, 1])], broadphase=None)
+    ex2.volumes(np.eye(4))  # coincident faces: the boolean
+    assert list(ex.pose_sources) == ["kernel", "culled", "boolean"]
+    assert got[1] == 0.0 and ex.volume_bounds[1] == 0.0
+    assert 0 < ex.volume_bounds[0] < 1e-12 * got[0]
+    assert ex.volume_bounds[2] > ex.volume_bounds[0]
+    np.testing.assert_allclose(got[2], got[0] / 8, rtol=1e-9)  # an eighth of the sphere
+    assert ex2.pose_sources.tolist() == "boolean" and ex2.volume_bounds > 0
+
+
+def test_a_full_crossing_buffer_falls_back_to_the_boolean():
+    from exactgrasp.backends.exact import plain_volumes
+
+    hand = [box([0, 0, 0], [1, 1, 1])]
+    obj = [sphere(0.3, np.zeros(3), 2)]
+    P = np.eye(4)
+    P[:3, 3] = [0.9, 0.5, 0.5]  # the sphere crosses the hand's face x = 1
+    small = ExactIntersector(hand, obj, broadphase=None, capacity=1)
+    got = small.volumes(P[None])
+    assert small.stats["poses_boolean"] == 1 and small.pose_sources.tolist() == ["boolean"]
+    want = plain_volumes(hand, obj, P[None])
+    np.testing.assert_allclose(got, want, rtol=1e-9)
+    full = ExactIntersector(hand, obj, broadphase=None)
+    np.testing.assert_allclose(full.volumes(P[None]), want, rtol=1e-9)
+    assert full.stats["poses_boolean"] == 0
+
+
 def test_edges_passing_near_each_other_match_the_boolean():
     # An object edge passing within `gap` of a hand edge puts the ends of two faces' crossing
     # segments within rounding of each other: the floating-point decision on the planes'
