@@ -29,8 +29,7 @@ from exactgrasp.datapath import data_dir  # noqa: E402
 GRASP = "barrett-grasps/noise/spray_bottle_base.json"
 STAGES = (
     "move the object",
-    "near runs: object edges",
-    "near runs: co-tree edges",
+    "near runs",
     "seeds: object edges",
     "seeds: co-tree edges",
     "pairs: traced curves",
@@ -48,15 +47,10 @@ def staged_kernel():
     from exactgrasp.backends.exact import pose as P
     from exactgrasp.backends.exact.classify import classify_vertices
     from exactgrasp.backends.exact.search import trace_pairs
-    from exactgrasp.backends.exact.seeds import (
-        cotree_seeds,
-        frame_defect,
-        near_runs,
-        object_edge_seeds,
-    )
+    from exactgrasp.backends.exact.seeds import cotree_seeds, object_edge_seeds
     from exactgrasp.backends.exact.sums import volume_sum
-    from exactgrasp.backends.exact.tables import COTREE_BLOCK, GROW, OK
-    from exactgrasp.backends.exact.tolerances import LENGTH_FLOOR, U
+    from exactgrasp.backends.exact.tables import GROW, OK
+    from exactgrasp.backends.exact.tolerances import LENGTH_FLOOR
 
     @njit(nogil=True, error_model="numpy")
     def run(poses, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap, upto):
@@ -79,31 +73,15 @@ def staged_kernel():
             if upto == 1:
                 continue
             gscale = max(amax, gb)
-            defect = frame_defect(R)
-            stretch = 1.0 + 4.0 * defect + 16.0 * U
-            ferr = 2.0 * (4.0 * defect + 16.0 * U) * gscale
-            near_runs(
-                obj.edge_runs, R, t, False, stretch, 0.0, False, hand_grid, W.cell_range,
-                scratch.none, 1, scratch.near,
-            )  # fmt: skip
+            ferr = P.near_pass(R, t, gscale, hand, hand_grid, obj, object_grid, scratch)
             if upto == 2:
-                continue
-            near_runs(
-                hand.cotree_blocks, R, t, True, stretch, ferr, False, object_grid, W.cell_range,
-                scratch.none, 1, scratch.near_block,
-            )  # fmt: skip
-            near_runs(
-                hand.cotree_runs, R, t, True, stretch, ferr, True, object_grid, W.cell_range,
-                scratch.near_block, COTREE_BLOCK, scratch.near_cotree,
-            )  # fmt: skip
-            if upto == 3:
                 continue
             P._clear_records(W)
             n1 = object_edge_seeds(
                 object_mesh, obj, hand, hand_grid, scratch.object_V, scratch.near, gscale, W, 0
             )
             counts[0] += n1
-            if upto == 4:
+            if upto == 3:
                 continue
             n2 = cotree_seeds(
                 hand_mesh, hand, obj, object_grid, R, t, scratch.near_cotree, gscale, ferr,
@@ -112,7 +90,7 @@ def staged_kernel():
             if n1 < 0 or n2 < 0:
                 return None
             counts[1] += n2 - n1
-            if upto == 5:
+            if upto == 4:
                 continue
             seg, segerr, ncross, _, code = trace_pairs(
                 hand_mesh, hand, object_mesh, obj, scratch.object_V, scratch.object_D,
@@ -121,13 +99,13 @@ def staged_kernel():
             if code == GROW:
                 return None
             counts[2] += ncross
-            if upto == 6:
+            if upto == 5:
                 continue
             code, token = classify_vertices(
                 R, t, hand_mesh, hand, object_mesh, obj, hand_grid, object_grid, scratch, code,
                 token, ferr,
             )  # fmt: skip
-            if upto == 7:
+            if upto == 6:
                 continue
             if code == OK:
                 out[ip] = volume_sum(

@@ -1,7 +1,8 @@
 """The exact kernel's per-pose driver (numba): hand ∩ moved object for a batch of poses.
 
 Each pose runs the stages of "Method, per pose" in ``docs/exact-backend.md`` in order: move
-(`move_object`), seeds (`seeds.object_edge_seeds`, `seeds.cotree_seeds`), pairs
+(`move_object`), near runs (`near_pass`), seeds (`seeds.object_edge_seeds`,
+`seeds.cotree_seeds`), pairs
 (`search.trace_pairs`), classify (`classify.classify_vertices`) and sum (`sums.volume_sum`).
 The tables are `tables`' named tuples. Imports numba, `classify`, `search`, `seeds`, `sums`,
 `tables` and `tolerances`.
@@ -60,6 +61,35 @@ def move_object(R, t, BV0, BF, tiny, bmax, BV, BD, BN):
         BV[i, 2] = r20 * x + r21 * y + r22 * z + t2
     face_terms(BV, BF, tiny, BD, BN)
     return bmax + np.sqrt(t0 * t0 + t1 * t1 + t2 * t2) * ROUNDING_PAD
+
+
+@inner(nogil=True, error_model="numpy")
+def near_pass(R, t, gscale, hand, hand_grid, obj, object_grid, scratch):
+    """Stage "near runs" of a pose: which runs of object edges may come near the hand's surface
+    (``scratch.near``) and which runs of the hand's co-tree edges near the object's
+    (``scratch.near_cotree``, through their blocks, ``scratch.near_block``), `seeds.near_runs`.
+    Returns ``ferr``: how far a point moved into the object's frame by ``R^T`` may lie from
+    where the pose's inverse puts it (R's departure from a rotation, `seeds.frame_defect`, and
+    rounding; ``gscale`` bounds every coordinate), which widens every test made there."""
+    W = scratch.work
+    defect = frame_defect(R)
+    stretch = 1.0 + 4.0 * defect + 16.0 * U
+    ferr = 2.0 * (4.0 * defect + 16.0 * U) * gscale
+    near_runs(
+        obj.edge_runs, R, t, False, stretch, 0.0, False, hand_grid, W.cell_range,
+        scratch.none, 1, scratch.near,
+    )  # fmt: skip
+    # The co-tree's runs in two levels: blocks of runs by the surface cells alone, then the
+    # runs of near blocks against what those cells hold.
+    near_runs(
+        hand.cotree_blocks, R, t, True, stretch, ferr, False, object_grid, W.cell_range,
+        scratch.none, 1, scratch.near_block,
+    )  # fmt: skip
+    near_runs(
+        hand.cotree_runs, R, t, True, stretch, ferr, True, object_grid, W.cell_range,
+        scratch.near_block, COTREE_BLOCK, scratch.near_cotree,
+    )  # fmt: skip
+    return ferr
 
 
 @inner(nogil=True, error_model="numpy")
@@ -206,25 +236,7 @@ def pose_volumes(
             R, t, BV0, BF, tiny, bmax, scratch.object_V, scratch.object_D, scratch.object_N
         )
         gscale = max(amax, gb)
-        # The object's frame is reached with R^T, which differs from the inverse by R's
-        # departure from a rotation: the seeds found there widen their tolerances by it.
-        defect = frame_defect(R)
-        stretch = 1.0 + 4.0 * defect + 16.0 * U
-        ferr = 2.0 * (4.0 * defect + 16.0 * U) * gscale
-        near_runs(
-            obj.edge_runs, R, t, False, stretch, 0.0, False, hand_grid, W.cell_range,
-            scratch.none, 1, scratch.near,
-        )  # fmt: skip
-        # The co-tree's runs in two levels: blocks of runs by the surface cells alone, then the
-        # runs of near blocks against what those cells hold.
-        near_runs(
-            hand.cotree_blocks, R, t, True, stretch, ferr, False, object_grid, W.cell_range,
-            scratch.none, 1, scratch.near_block,
-        )  # fmt: skip
-        near_runs(
-            hand.cotree_runs, R, t, True, stretch, ferr, True, object_grid, W.cell_range,
-            scratch.near_block, COTREE_BLOCK, scratch.near_cotree,
-        )  # fmt: skip
+        ferr = near_pass(R, t, gscale, hand, hand_grid, obj, object_grid, scratch)
         while True:
             attempt += 1
             if attempt >= 2**30:
