@@ -48,3 +48,15 @@ def box_arrays(lo, hi) -> tuple[np.ndarray, np.ndarray]:
         ]
     )
     return vertices, faces
+
+
+def box_grasp():
+    """A small box object in a one-box hand (palm frame at its top face): a grasp every
+    backend computes in milliseconds."""
+    import exactgrasp as eg
+
+    hand = eg.Hand.from_meshes(
+        [box_arrays([-0.05, -0.05, 0.0], [0.05, 0.05, 0.02])],
+        frame=eg.HandFrame.from_palm([0, 0, 0.02], [0, 0, 1], [0, 1, 0], 0.08),
+    )
+    return eg.Grasp(hand, eg.Solid(*box_arrays([0, 0, 0], [0.01, 0.01, 0.01])), name="g")

@@ -4,7 +4,7 @@ import pytest
 import exactgrasp as eg
 from exactgrasp import backends as registry
 from exactgrasp.descriptor import DescriptorError
-from tests.conftest import box_arrays
+from tests.conftest import box_grasp
 
 
 class ShiftBackend(eg.Backend):
@@ -26,11 +26,7 @@ class ShiftBackend(eg.Backend):
 
 @pytest.fixture
 def grasp():
-    hand = eg.Hand.from_meshes(
-        [box_arrays([-0.05, -0.05, 0.0], [0.05, 0.05, 0.02])],
-        frame=eg.HandFrame.from_palm([0, 0, 0.02], [0, 0, 1], [0, 1, 0], 0.08),
-    )
-    return eg.Grasp(hand, eg.Solid(*box_arrays([0, 0, 0], [0.01, 0.01, 0.01])), name="g")
+    return box_grasp()
 
 
 @pytest.fixture(autouse=True)

@@ -18,7 +18,7 @@ from exactgrasp.backends.exact import ExactBackend, ExactIntersector
 from exactgrasp.batch import compute_rows
 from exactgrasp.batch.manifest import ManifestRow
 from exactgrasp.descriptor import compute_volumes
-from tests.conftest import box_arrays
+from tests.conftest import box_arrays, box_grasp
 
 
 class CountingBackend(eg.Backend):
@@ -44,11 +44,7 @@ class CountingBackend(eg.Backend):
 
 @pytest.fixture
 def grasp():
-    hand = eg.Hand.from_meshes(
-        [box_arrays([-0.05, -0.05, 0.0], [0.05, 0.05, 0.02])],
-        frame=eg.HandFrame.from_palm([0, 0, 0.02], [0, 0, 1], [0, 1, 0], 0.08),
-    )
-    return eg.Grasp(hand, eg.Solid(*box_arrays([0, 0, 0], [0.01, 0.01, 0.01])), name="g")
+    return box_grasp()
 
 
 def translations(*shifts):
