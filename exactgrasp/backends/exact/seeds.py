@@ -166,6 +166,31 @@ def _filter_row(FL, f):
 
 
 @inner(nogil=True, error_model="numpy")
+def _cell_row(PT, c):
+    """Row c of a grid's cell bounds (`tables.CellGrid.bounds`, 11 values) as a tuple, for
+    `_piece_meets_cell`."""
+    return (
+        PT[c, 0], PT[c, 1], PT[c, 2], PT[c, 3], PT[c, 4], PT[c, 5], PT[c, 6], PT[c, 7],
+        PT[c, 8], PT[c, 9], PT[c, 10],
+    )  # fmt: skip
+
+
+@inner(nogil=True, error_model="numpy")
+def _piece_meets_cell(row, ax, ay, az, bx, by, bz, x0, x1, y0, y1, z0, z1, tol):
+    """Whether the piece a b of a segment (its box x0..z1, already grown) may meet what a cell
+    holds of its faces: their clipped common box and the slab ``row[3] - tol <= n·x <=
+    row[4] + tol`` along the direction ``row[:3]`` (the cell's bounds row, `_cell_row`), with
+    one branch. A tuple, not the bounds' array: an array argument would cost atomic
+    reference-count updates a call."""
+    pa = row[0] * ax + row[1] * ay + row[2] * az
+    pb = row[0] * bx + row[1] * by + row[2] * bz
+    return (
+        (row[5] <= x1) & (row[8] >= x0) & (row[6] <= y1) & (row[9] >= y0) & (row[7] <= z1)
+        & (row[10] >= z0) & (min(pa, pb) <= row[4] + tol) & (max(pa, pb) >= row[3] - tol)
+    )  # fmt: skip
+
+
+@inner(nogil=True, error_model="numpy")
 def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work, n):
     """Candidate pairs of the object's edges near the hand's surface (runs ``near``, see
     `near_runs`): each edge walks the hand-grid cells it passes (a 3-D line walk, moved
@@ -252,15 +277,9 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
                     x0, x1 = min(ax_, bx_) - margin, max(ax_, bx_) + margin
                     y0, y1 = min(ay_, by_) - margin, max(ay_, by_) + margin
                     z0, z1 = min(az_, bz_) - margin, max(az_, bz_) + margin
-                    pa = PT[c, 0] * ax_ + PT[c, 1] * ay_ + PT[c, 2] * az_
-                    pb = PT[c, 0] * bx_ + PT[c, 1] * by_ + PT[c, 2] * bz_
-                    # The piece against what the cell holds of its faces (their clipped
-                    # common box and slab), with one branch.
-                    ok = (
-                        (PT[c, 5] <= x1) & (PT[c, 8] >= x0) & (PT[c, 6] <= y1)
-                        & (PT[c, 9] >= y0) & (PT[c, 7] <= z1) & (PT[c, 10] >= z0)
-                        & (min(pa, pb) <= PT[c, 4] + margin)
-                        & (max(pa, pb) >= PT[c, 3] - margin)
+                    ok = _piece_meets_cell(
+                        _cell_row(PT, c), ax_, ay_, az_, bx_, by_, bz_, x0, x1, y0, y1, z0, z1,
+                        margin,
                     )  # fmt: skip
                     if ok:
                         # The list's groups' boxes, then the boxes of the groups that meet the
@@ -403,16 +422,11 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
                             c = (i * n1 + j) * n2 + k
                             if cs[c + 1] == cs[c]:
                                 continue
-                            # The piece against what the cell holds (its faces' clipped common
-                            # box and slab), then the listed faces' clipped boxes, each with one
-                            # branch.
-                            pa = PT[c, 0] * ax_ + PT[c, 1] * ay_ + PT[c, 2] * az_
-                            pb = PT[c, 0] * bx_ + PT[c, 1] * by_ + PT[c, 2] * bz_
-                            ok = (
-                                (PT[c, 5] <= x1) & (PT[c, 8] >= x0) & (PT[c, 6] <= y1)
-                                & (PT[c, 9] >= y0) & (PT[c, 7] <= z1) & (PT[c, 10] >= z0)
-                                & (min(pa, pb) <= PT[c, 4] + grow)
-                                & (max(pa, pb) >= PT[c, 3] - grow)
+                            # The piece against what the cell holds, then the listed faces'
+                            # clipped boxes, each with one branch.
+                            ok = _piece_meets_cell(
+                                _cell_row(PT, c), ax_, ay_, az_, bx_, by_, bz_, x0, x1, y0, y1,
+                                z0, z1, grow,
                             )  # fmt: skip
                             if not ok:
                                 continue
