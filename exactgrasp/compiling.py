@@ -95,11 +95,13 @@ class _Inner(_Kernel):
 
 def _make(cls: type, options: dict[str, Any]):
     def decorate(function):
-        settings = {"cache": True, **options}
-        dispatcher = numba.njit(**settings)(function)
+        settings = dict(options)
+        cache = settings.pop("cache", True)
+        dispatcher = numba.njit(cache=False, **settings)(function)
         # Same layout, one overridden method: the dispatcher keeps every numba behaviour.
         dispatcher.__class__ = cls
-        if settings["cache"]:
+        if cache:
+            # What numba's own ``cache=True`` does, with the cache keyed as above.
             dispatcher._cache = _KernelCache(function)
         return dispatcher
 
