@@ -18,7 +18,7 @@ import numpy as np
 
 from exactgrasp.backends.params import Param
 from exactgrasp.errors import BackendError
-from exactgrasp.geometry.se3 import rigid_defects
+from exactgrasp.geometry.se3 import rigid_defect, rigid_defects
 
 if TYPE_CHECKING:
     from exactgrasp.grasp import Grasp
@@ -65,35 +65,19 @@ def check_poses(poses: np.ndarray, name: str = "poses") -> np.ndarray:
             "matrices."
         )
     orthonormality, determinant, last_row = rigid_defects(arr)
-    checks = (
-        (
-            last_row > RIGID_ATOL,
-            lambda i: f"its last row is {arr[i][3].tolist()}, not [0, 0, 0, 1]",
-        ),
-        (
-            determinant < 0,
-            lambda i: f"its rotation part has determinant {determinant[i]:.6g} (a reflection)",
-        ),
-        (
-            orthonormality > RIGID_ATOL,
-            lambda i: (
-                "its rotation part is not orthonormal (max |R^T R - I| = "
-                f"{orthonormality[i]:.3g}: a scale or a shear)"
-            ),
-        ),
-        (
-            np.abs(determinant - 1.0) > RIGID_ATOL,
-            lambda i: (
-                f"its rotation part has determinant {determinant[i]:.15g}, "
-                f"{abs(determinant[i] - 1.0):.3g} from 1"
-            ),
-        ),
-    )
-    for bad, what in checks:
+    # The first pose failing the first check that any fails: the same order as `rigid_defect`,
+    # which words it.
+    for bad in (
+        last_row > RIGID_ATOL,
+        determinant < 0,
+        orthonormality > RIGID_ATOL,
+        np.abs(determinant - 1.0) > RIGID_ATOL,
+    ):
         if bad.any():
             index = _first(bad)
             raise BackendError(
-                f"{_label(name, index)} is not a rigid motion: {what(index)}. Backends move the "
+                f"{_label(name, index)} is not a rigid motion: "
+                f"{rigid_defect(arr[index], RIGID_ATOL)}. Backends move the "
                 f"object rigidly; pass rotations (det +1, orthonormal to {RIGID_ATOL:g}) with a "
                 "translation and last row 0 0 0 1, and scale meshes with units=..., not poses."
             )

@@ -145,6 +145,37 @@ def rigid_defects(transforms: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nd
     return orthonormality, np.linalg.det(rot), last_row
 
 
+def rigid_defect(transform: np.ndarray, atol: float) -> str | None:
+    """What keeps one 4x4 matrix from a proper rigid transform within ``atol``, in the words
+    of an error message ("its last row is ...", "... (a reflection)", "... a scale or a
+    shear", "... determinant ..., ... from 1"), the first of those that applies; None when
+    it is rigid.
+
+    Parameters
+    ----------
+    transform : numpy.ndarray, shape (4, 4)
+    atol : float
+        Absolute tolerance on ``R^T R = I``, ``det R = 1`` and the last row.
+    """
+    transform = np.asarray(transform, dtype=np.float64)
+    orthonormality, determinant, last_row = (float(x) for x in rigid_defects(transform))
+    if last_row > atol:
+        return f"its last row is {transform[3].tolist()}, not [0, 0, 0, 1]"
+    if determinant < 0:
+        return f"its rotation part has determinant {determinant:.6g} (a reflection)"
+    if orthonormality > atol:
+        return (
+            f"its rotation part is not orthonormal (max |R^T R - I| = {orthonormality:.3g}: "
+            "a scale or a shear)"
+        )
+    if abs(determinant - 1.0) > atol:
+        return (
+            f"its rotation part has determinant {determinant:.15g}, "
+            f"{abs(determinant - 1.0):.3g} from 1"
+        )
+    return None
+
+
 def is_rigid(transform: np.ndarray, atol: float = 1e-6) -> bool:
     """Whether a 4x4 matrix is a proper rigid transform (rotation with det +1, last row 0 0 0 1).
 

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.errors import GraspFileError
-from exactgrasp.geometry.se3 import is_rigid, rigid_defects
+from exactgrasp.geometry.se3 import rigid_defect
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.grasp.files import read_hand, read_object, write_hand, write_object
 from exactgrasp.grasp.schema import check_grasp_data
@@ -62,19 +62,8 @@ def check_pose(
         raise GraspFileError(f"{name} must be a 4x4 matrix, got shape {arr.shape}.")
     if not np.all(np.isfinite(arr)):
         raise GraspFileError(f"{name} contains NaN or infinite entries.")
-    if not is_rigid(arr, atol=POSE_ATOL):
-        orthonormality, determinant, last_row = (float(x) for x in rigid_defects(arr))
-        if last_row > POSE_ATOL:
-            what = f"its last row is {arr[3].tolist()}, not [0, 0, 0, 1]"
-        elif determinant < 0:
-            what = f"its rotation part has determinant {determinant:.6g} (a reflection)"
-        elif orthonormality > POSE_ATOL:
-            what = (
-                f"its rotation part is not orthonormal (max |R^T R - I| = {orthonormality:.3g}: "
-                "a scale or a shear)"
-            )
-        else:
-            what = f"its rotation part has determinant {determinant:.15g}, not 1"
+    what = rigid_defect(arr, POSE_ATOL)
+    if what is not None:
         raise GraspFileError(
             f"{name} is not a rigid transform: {what}. Give a rotation (orthonormal, "
             f"determinant +1, to {POSE_ATOL:g}) and a translation in metres, last row 0 0 0 1; "
