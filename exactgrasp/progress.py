@@ -9,7 +9,7 @@ The compile notice: importing this module registers a listener for numba's
 ``numba:compile`` event, which numba fires only when it compiles a function (a cache miss),
 never when a kernel loads from its on-disk cache. The first time in a process that a kernel
 of one family (`COMPILE_SECONDS`) compiles, one line goes to stderr,
-``compiling exactgrasp kernels (exact backend), first use only (about 21 s)``, above any bar,
+``compiling exactgrasp kernels (exact backend), first use only (about 23 s)``, above any bar,
 and the bars show "compiling kernels" until the compilation ends. It prints whether or not
 stderr is a terminal (a log then says why the first call took long); a non-empty
 ``EXACTGRASP_NO_PROGRESS`` silences it, as it silences the bars. Layer 0: imports nothing from
@@ -31,7 +31,7 @@ __all__ = ["COMPILE_SECONDS", "ProgressBar", "progress_bar", "progress_enabled"]
 #: Seconds each family of kernels takes to compile from an empty cache on the reference
 #: 2-core machine, as the notice announces them (measured by ``benchmarks/cold_start.py``;
 #: see "Cold start" in docs/performance.md).
-COMPILE_SECONDS = {"exact backend": 21, "voxel estimator": 5, "geometry": 2}
+COMPILE_SECONDS = {"exact backend": 23, "voxel estimator": 5, "geometry": 2}
 
 # The family of a kernel is that of the package module that calls it from Python (module
 # prefix -> family, first match), else of the module that defines it.
