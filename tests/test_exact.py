@@ -281,6 +281,76 @@ def test_poses_equal_to_rounding_are_computed_once():
     assert agrees(got, ref, ex.hand_volume).all()
 
 
+def corner_dip():
+    """A box hand (top face z = 0) and a unit cube tilted so that one corner points down:
+    ``pose(d)`` dips that corner to depth d; the overlap is then the simplex of volume
+    ``d³ / (6 c1 c2 c3)`` (``c`` the cube's edge directions' z components), an analytic
+    reference at every depth below the shortest edge's reach."""
+    R = (
+        Rotation.from_rotvec([0.15, -0.1, 0.3]).as_matrix()
+        @ Rotation.align_vectors([[0, 0, 1]], [[1, 1, 1]])[0].as_matrix()
+    )
+    c = R[2]
+    assert (c > 0.2).all()
+
+    def pose(d):
+        P = np.eye(4)
+        P[:3, :3] = R
+        P[:3, 3] = [0.1, -0.2, -d]
+        return P
+
+    def volume(d):
+        return d**3 / (6.0 * c[0] * c[1] * c[2])
+
+    return [box([-1, -1, -1], [1, 1, 0])], [box([0, 0, 0], [1, 1, 1])], pose, volume
+
+
+def test_overlaps_thinner_than_the_bound_read_zero_and_the_rest_agree():
+    hand, obj, pose, volume = corner_dip()
+    ex = ExactIntersector(hand, obj, broadphase=None)
+    depths = 10.0 ** -np.arange(1.0, 7.5, 0.25)
+    got = ex.volumes(np.stack([pose(d) for d in depths]))
+    bound, want = ex.volume_bounds, volume(depths)
+    assert (ex.pose_sources == "kernel").all()
+    assert (got >= 0).all() and (np.abs(got - want) <= bound + 1e-14 * want).all()
+    zero = got == 0
+    # Both kinds occur: overlaps above the bound agree to the rule of `agrees`, those within
+    # it read exactly 0, although many of them are above the rule's floor.
+    assert zero.any() and (~zero).any()
+    assert agrees(got[~zero], want[~zero], ex.hand_volume).all()
+    assert not agrees(got[zero], want[zero], ex.hand_volume).all()
+    assert (want[zero] <= bound[zero] * (1 + 1e-12)).all()
+    assert want[zero].max() < want[~zero].min()
+    # The bound is far below the scene's size cubed (G = 2 here).
+    assert bound.max() <= 1e-12 * 2.0**3
+
+
+def test_poses_equal_to_rounding_take_the_volume_of_the_first_within_its_bound():
+    hand, obj, pose, volume = corner_dip()
+    ex = ExactIntersector(hand, obj, broadphase=None)
+    zero_at, kept_at = 1e-7, 1e-3
+    assert ex.volumes(pose(zero_at)[None])[0] == 0 < ex.volumes(pose(kept_at)[None])[0]
+    # Bisect to the depths where the volume leaves its bound of zero, within rounding.
+    while kept_at - zero_at > 1e-15:
+        mid = 0.5 * (zero_at + kept_at)
+        if ex.volumes(pose(mid)[None])[0] == 0:
+            zero_at = mid
+        else:
+            kept_at = mid
+    a, b = pose(zero_at), pose(kept_at)
+    assert 1e-13 < volume(zero_at) < 1e-12  # the edge of the band of zeros (docs)
+    assert repeated_poses(np.stack([a, b])).tolist() == [0, 0]
+    alone = ex.volumes(b[None])[0]
+    assert alone > 0
+    first_a = ex.volumes(np.stack([a, b]))
+    assert first_a.tolist() == [0.0, 0.0]
+    first_b = ex.volumes(np.stack([b, a]))
+    assert first_b.tolist() == [alone, alone]
+    bounds = ex.volume_bounds
+    for d, v, e in zip((kept_at, zero_at), first_b, bounds, strict=True):
+        assert abs(v - volume(d)) <= e
+
+
 def test_volumes_invariant_to_object_units_once_normalised():
     links, objs = overlapping_hand()
     rng = np.random.default_rng(2)
