@@ -52,7 +52,11 @@ def test_empty_mesh():
 def test_points_only_file(tmp_path):
     path = tmp_path / "cloud.ply"
     trimesh.PointCloud(np.random.default_rng(0).random((10, 3))).export(path)
-    with pytest.raises(MeshError, match=r"cloud\.ply: the mesh is empty"):
+    with pytest.raises(
+        MeshError,
+        match=r"cloud\.ply: holds a point cloud of 10 points and no faces; .*"
+        r"`surface_samples` \(the grasp file's \"object_surface_samples\"\)",
+    ):
         Solid.from_file(path)
 
 

@@ -74,7 +74,24 @@ def load_trimesh(path: Path) -> trimesh.Trimesh:
         ) from exc
     if not isinstance(loaded, trimesh.Trimesh):
         raise MeshError(f"{path}: holds no triangle mesh (read as {type(loaded).__name__}).")
+    if len(loaded.faces) == 0:
+        _refuse_points_only(path)
     return loaded
+
+
+def _refuse_points_only(path: Path) -> None:
+    """Refuse a file with no faces, naming its points when it holds a point cloud (trimesh's
+    ``force="mesh"`` reads one as an empty mesh)."""
+    try:
+        points = len(getattr(trimesh.load(path, process=False), "vertices", ()))
+    except Exception:  # the message then says what is known: no faces
+        points = 0
+    held = f"a point cloud of {points:,} points and no faces" if points else "no faces"
+    raise MeshError(
+        f"{path}: holds {held}; a solid needs a closed triangle surface. Give the object's "
+        "mesh file instead; surface samples like these go with it as `surface_samples` "
+        '(the grasp file\'s "object_surface_samples").'
+    )
 
 
 def load_points(source: Any, units: str = "m", name: str = "surface_samples") -> np.ndarray:
