@@ -24,7 +24,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-from exactgrasp.datapath import data_dir  # noqa: E402
+from shared_data import add_data_options, data_or_skip  # noqa: E402
 
 GRASP = "barrett-grasps/noise/spray_bottle_base.json"
 STAGES = (
@@ -119,12 +119,10 @@ def staged_kernel():
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3, help="runs per stopping point (median)")
-    ap.add_argument("--data", type=Path, default=None, help="the shared data folder")
-    ap.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
+    add_data_options(ap)
     args = ap.parse_args(argv)
-    data = args.data or data_dir()
-    if not (data / GRASP).is_file():
-        print(f"skipped: {GRASP} not found under {data.resolve()} (set EXACTGRASP_DATA)")
+    data = data_or_skip(args, GRASP)
+    if data is None:
         return 0
     from exactgrasp import Grasp
     from exactgrasp.backends.exact import ExactIntersector

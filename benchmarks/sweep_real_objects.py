@@ -39,9 +39,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from shared_data import add_data_options, data_or_skip  # noqa: E402
+
 from exactgrasp import Grasp, Solid  # noqa: E402
 from exactgrasp.backends.exact import RTOL, ExactIntersector, agrees, plain_volumes  # noqa: E402
-from exactgrasp.datapath import data_dir  # noqa: E402
 from exactgrasp.errors import MeshError  # noqa: E402
 from exactgrasp.geometry.se3 import exp_se3  # noqa: E402
 from exactgrasp.paths.sampler import PathSampler  # noqa: E402
@@ -166,12 +167,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--paths", type=int, default=12, help="paths bisected a scene")
     ap.add_argument("--reference", type=int, default=30, help="subsampled poses compared")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--data", type=Path, default=None, help="the shared data folder")
-    ap.add_argument("--json", type=Path, help="also write the figures to this JSON file")
+    add_data_options(ap)
     args = ap.parse_args(argv)
-    data = args.data or data_dir()
-    if not (data / GRASP).is_file():
-        print(f"skipped: {GRASP} not found under {data.resolve()} (set EXACTGRASP_DATA)")
+    data = data_or_skip(args, GRASP)
+    if data is None:
         return 0
     rng = np.random.default_rng(args.seed)
     rows = []
