@@ -7,8 +7,8 @@ that could be the hand, and what `exactgrasp.hands.loading.load_model` makes of 
 directions): enough to choose ``root_body``, the palm frame and the closing joints without
 reading XML.
 
-May import: `exactgrasp.errors`, `exactgrasp.hands` (builtins, hand, loading, scene) and
-`exactgrasp.grasp.closing`.
+May import: `exactgrasp.errors`, `exactgrasp.cli.common`, `exactgrasp.hands` (builtins, hand,
+loading, scene) and `exactgrasp.grasp.closing`.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import warnings
 from pathlib import Path
 from typing import Any
 
+from exactgrasp.cli.common import renamed
 from exactgrasp.errors import ExactGraspError, ModelError
 from exactgrasp.grasp.closing import closing_directions
 from exactgrasp.hands.builtins import BUILTIN_MJCF, get_builtin
@@ -42,7 +43,7 @@ def _flag_spelling(exc: ExactGraspError) -> ExactGraspError:
     message = str(exc)
     for pattern, flag in PACKAGE_DIR_FLAG:
         message = pattern.sub(flag, message)
-    return type(exc)(message) if message != str(exc) else exc
+    return renamed(exc, message) if message != str(exc) else exc
 
 
 def package_dirs_from_args(values: list[str] | None) -> Any:
