@@ -42,7 +42,12 @@ sys.path.insert(0, str(ROOT))
 from shared_data import add_data_options, data_or_skip  # noqa: E402
 
 from exactgrasp import Grasp, Solid  # noqa: E402
-from exactgrasp.backends.exact import RTOL, ExactIntersector, agrees, plain_volumes  # noqa: E402
+from exactgrasp.backends.exact import (  # noqa: E402
+    ExactIntersector,
+    agrees,
+    plain_error,
+    plain_volumes,
+)
 from exactgrasp.errors import MeshError  # noqa: E402
 from exactgrasp.geometry.se3 import exp_se3  # noqa: E402
 from exactgrasp.paths.sampler import PathSampler  # noqa: E402
@@ -136,7 +141,7 @@ def sweep(name: str, grasp: Grasp, args: argparse.Namespace, rng: np.random.Gene
     )  # fmt: skip
     want = plain_volumes(hand, obj, poses[checked])
     size = max(float(np.abs(V).max()) for V, _ in hand + obj)
-    allowed = bounds[checked] + RTOL * np.abs(want) + 4e-12 * size * ex.areas
+    allowed = bounds[checked] + plain_error(want, size, ex.areas)
     mine = got[checked]
     nonzero = mine != 0
     banded = (mine == 0) & (want > 0)

@@ -30,7 +30,7 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, HalfspaceIntersection
 from scipy.spatial.transform import Rotation
 
-from exactgrasp.backends.exact import RTOL, ExactIntersector
+from exactgrasp.backends.exact import ExactIntersector, plain_error
 
 # ---------------------------------------------------------------------------------------------
 # Meshes
@@ -780,8 +780,8 @@ def is_rational(scene: Scene) -> bool:
 
 def reference_error(scene: Scene, want: np.ndarray, exact: bool) -> np.ndarray:
     """How far a reference volume may be from the truth: 0 for rational ones; for manifold3d
-    and half-space ones, 1e-9 relative plus manifold3d's own tolerance (1e-12 of the
-    coordinates' magnitude) times both surfaces' areas, four times over."""
+    and half-space ones, `plain_error` (1e-9 relative plus manifold3d's own tolerance, 1e-12
+    of the coordinates' magnitude, times both surfaces' areas, four times over)."""
     if exact:
         return np.zeros_like(want)
     meshes = scene.hand_meshes() + scene.object_meshes()
@@ -795,7 +795,7 @@ def reference_error(scene: Scene, want: np.ndarray, exact: bool) -> np.ndarray:
         / 2
         for V, F in meshes
     )
-    return RTOL * np.abs(want) + 4e-12 * size * area
+    return plain_error(want, size, area)
 
 
 def mismatches(scene, got, want, bounds, exact):

@@ -9,7 +9,7 @@ array-level core), `backend` (the `Backend`), `tables` (the kernel's named table
 
 from exactgrasp.backends.exact.backend import ExactBackend
 from exactgrasp.backends.exact.intersector import ExactIntersector, repeated_poses
-from exactgrasp.backends.exact.reference import FLOOR, RTOL, agrees, plain_volumes
+from exactgrasp.backends.exact.reference import FLOOR, RTOL, agrees, plain_error, plain_volumes
 
 __all__ = [
     "FLOOR",
@@ -17,6 +17,7 @@ __all__ = [
     "ExactBackend",
     "ExactIntersector",
     "agrees",
+    "plain_error",
     "plain_volumes",
     "repeated_poses",
 ]

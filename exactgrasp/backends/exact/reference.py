@@ -2,8 +2,9 @@
 
 `plain_volumes` is what the kernel is checked against (one ``Mesh64`` boolean of the whole hand
 and the whole object per pose); `agrees` is the rule "to `RTOL` relative, floored at `FLOOR`
-of the hand's volume" (see "Agreement" in ``docs/exact-backend.md``). Imports numpy,
-`backends.base`, `errors` and `geometry.manifold`.
+of the hand's volume" (see "Agreement" in ``docs/exact-backend.md``); `plain_error` is how far
+`plain_volumes` itself may be from the truth. Imports numpy, `backends.base`,
+`backends.exact.tolerances`, `errors` and `geometry.manifold`.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.backends.base import check_poses
+from exactgrasp.backends.exact.tolerances import BOOLEAN_SLACK
 from exactgrasp.errors import BackendError
 from exactgrasp.geometry.manifold import to_manifold, union_solids
 
@@ -18,6 +20,9 @@ from exactgrasp.geometry.manifold import to_manifold, union_solids
 RTOL = 1e-9
 #: Volumes below FLOOR times the hand volume are compared in absolute terms (see `agrees`).
 FLOOR = 1e-6
+
+#: manifold3d's tolerance, relative to the coordinates' magnitude (see `plain_error`).
+MANIFOLD_TOLERANCE = 1e-12
 
 #: A closed, outward-oriented triangle mesh: vertices (n, 3) float64, faces (m, 3) int.
 Mesh = tuple[np.ndarray, np.ndarray]
@@ -47,6 +52,27 @@ def agrees(a: np.ndarray, b: np.ndarray, hand_volume: float, rtol: float = RTOL)
     """
     a, b = np.asarray(a, float), np.asarray(b, float)
     return np.abs(a - b) <= rtol * np.maximum(np.abs(b), FLOOR * hand_volume)
+
+
+def plain_error(volumes: np.ndarray, size: float, area: float) -> np.ndarray:
+    """How far `plain_volumes` may lie from the true volumes: `RTOL` of each, plus what
+    manifold3d's merging within its tolerance (`MANIFOLD_TOLERANCE` of the coordinates'
+    magnitude) can move, `BOOLEAN_SLACK` times that tolerance times the surfaces' area.
+
+    Parameters
+    ----------
+    volumes : numpy.ndarray
+        `plain_volumes`' volumes (cubed units of the meshes).
+    size : float
+        The largest absolute coordinate of the meshes.
+    area : float
+        The surfaces' area (both meshes).
+
+    Returns
+    -------
+    numpy.ndarray, same shape as ``volumes``
+    """
+    return RTOL * np.abs(volumes) + BOOLEAN_SLACK * MANIFOLD_TOLERANCE * size * area
 
 
 def solids(meshes: list[Mesh], what: str) -> list:
