@@ -314,7 +314,10 @@ def test_open_mesh_is_refused(tmp_path):
             warnings.simplefilter("ignore")
             load_model(_write(tmp_path, text))
     except ModelError as exc:
-        assert "'shell'" in str(exc) and "not a closed" in str(exc)
+        text = str(exc)
+        assert "'shell'" in text and "is not a closed surface" in text
+        # The three rim edges of the missing face, with where one is.
+        assert "(3 edges belong to an odd number of faces (holes), e.g. at (" in text
     else:  # pragma: no cover - mujoco would have to close the mesh itself
         pytest.fail("an open mesh was accepted")
 

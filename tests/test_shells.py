@@ -158,19 +158,22 @@ def test_same_orientation_nested_shell_is_dropped():
 
 
 def folded_box():
-    """A unit box whose corner (1, 1, 1) is pushed through the face x = 0."""
+    """A unit box whose corner (1, 1, 1) is pushed through the face x = 0, its edges meeting
+    that face exactly on the face's diagonal."""
     v, f = box_arrays([0, 0, 0], [1, 1, 1])
     v[7] = [-0.5, 0.5, 0.5]
     return v, f
 
 
-def test_self_intersecting_shell_is_refused():
+def test_crossing_exactly_on_an_edge_is_refused_with_where():
     v, f = folded_box()
     with pytest.raises(MeshError) as info:
         Solid(v, f, name="folded.stl")
     text = str(info.value)
-    assert text.startswith("folded.stl: the surface (8 vertices, 12 triangles) crosses itself: ")
-    assert "pairs of its triangles cross, e.g. triangles" in text
+    assert text.startswith(
+        "folded.stl: the surface (8 vertices, 12 triangles) crosses itself in 4 triangle pairs"
+    )
+    assert "cannot be cut with certainty" in text
     assert "near (" in text and "MeshLab's 'Select Self Intersecting Faces'" in text
     # With a clean shell beside it, the message names the bad shell.
     v2, f2 = two_shells(box_arrays([3, 0, 0], [4, 1, 1]), folded_box())
@@ -331,9 +334,9 @@ def test_combinations_not_resolved_are_refused_with_the_fix(boxes, why):
         Solid(v, f, name="combo")
 
 
-def test_repair_does_not_fix_a_shell_that_crosses_itself():
+def test_repair_does_not_touch_a_closed_shell_that_crosses_itself():
     v, f = folded_box()
     with pytest.raises(
-        MeshError, match=r"^folded\.stl: the surface .* crosses itself: .*modeller"
+        MeshError, match=r"^folded\.stl: the surface .* crosses itself in 4 .*modeller"
     ):
         Solid(v, f, name="folded.stl", repair=True)

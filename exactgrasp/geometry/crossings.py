@@ -65,11 +65,12 @@ def _edge_tri(X, e0, e1, a, b, c, bound):
 
 
 @inner(nogil=True, error_model="numpy")
-def _tri_tri(V, F, t, u, skip_shared, X, out):
+def _tri_tri(V, F, ident, t, u, skip_shared, flat_check, X, out):
     """Do triangles t and u of (V, F) meet? `NO`, `CROSS` (a certain crossing, its point
     written to ``out`` (3,)) or `UNSURE`. With ``skip_shared`` (triangles of one shell
-    sharing one corner), meeting only at that corner counts as `NO`. ``X`` (6, 3) is
-    scratch space.
+    sharing one corner, by ``ident``), meeting only at that corner counts as `NO`. With
+    ``flat_check``, an uncertain pair that is apart in projection (`_apart_in_projection`)
+    counts as `NO`. ``X`` (6, 3) is scratch space.
 
     Two closed triangles meet iff an edge of one meets the other, so six edge tests decide.
     """
@@ -94,8 +95,10 @@ def _tri_tri(V, F, t, u, skip_shared, X, out):
         side = 0
         split = False
         for k in range(3):
-            vk = F[tb, k]
-            if skip_shared and (vk == F[ta, 0] or vk == F[ta, 1] or vk == F[ta, 2]):
+            vk = ident[F[tb, k]]
+            if skip_shared and (
+                vk == ident[F[ta, 0]] or vk == ident[F[ta, 1]] or vk == ident[F[ta, 2]]
+            ):
                 continue
             s = _sign(
                 orient_det(X[a, 0], X[a, 1], X[a, 2], X[a + 1, 0], X[a + 1, 1], X[a + 1, 2],
@@ -122,7 +125,60 @@ def _tri_tri(V, F, t, u, skip_shared, X, out):
                 return CROSS
             if code == UNSURE:
                 result = UNSURE
+    if result == UNSURE and flat_check and _apart_in_projection(X):
+        return NO
     return result
+
+
+@inner(nogil=True, error_model="numpy")
+def _apart_in_projection(X):
+    """Are triangles X[0:3] and X[3:6] certainly apart in their projection onto one of the
+    coordinate planes? Apart there means apart in space (the projection of a common point is
+    common to both). Decides the coplanar and perpendicular neighbours that the orientation
+    signs in space leave uncertain (triangles of one flat region, or of two flat regions
+    meeting at a crease)."""
+    for i, j in ((1, 2), (2, 0), (0, 1)):
+        if _apart_2d(X, i, j):
+            return True
+    return False
+
+
+@inner(nogil=True, error_model="numpy")
+def _apart_2d(X, i, j):
+    """Separating-axis test of the two triangles' projections onto axes (i, j), with an edge
+    of either triangle as the axis; every sign certified."""
+    ext = 0.0
+    for ax in (i, j):
+        lo = X[0, ax]
+        hi = lo
+        for k in range(1, 6):
+            lo = min(lo, X[k, ax])
+            hi = max(hi, X[k, ax])
+        ext = max(ext, hi - lo)
+    # Rounding of a 2D orientation determinant is below 4 eps times its terms, at most 2 L^2.
+    bound = 1e-14 * ext * ext
+    for first in range(2):
+        a, b = (0, 3) if first == 0 else (3, 0)
+        area = (X[a + 1, i] - X[a, i]) * (X[a + 2, j] - X[a, j]) - (X[a + 1, j] - X[a, j]) * (
+            X[a + 2, i] - X[a, i]
+        )
+        if abs(area) <= bound:
+            continue
+        turn = 1.0 if area > 0 else -1.0
+        for k in range(3):
+            p, q = a + k, a + (k + 1) % 3
+            outside = True
+            for r in range(3):
+                c = b + r
+                d = (X[q, i] - X[p, i]) * (X[c, j] - X[p, j]) - (X[q, j] - X[p, j]) * (
+                    X[c, i] - X[p, i]
+                )
+                if turn * d >= -bound:
+                    outside = False
+                    break
+            if outside:
+                return True
+    return False
 
 
 @kernel(nogil=True, error_model="numpy")
@@ -139,11 +195,12 @@ def _fill_cells(i0, i1, n, offsets, keys, tris):
 
 
 @kernel(nogil=True, error_model="numpy")
-def _pair_scan(V, F, shell, lo, hi, i0, n, keys, tris):
+def _pair_scan(V, F, ident, shell, self_contacts, lo, hi, i0, n, keys, tris):
     """Test every pair of triangles sharing a grid cell, once (in the first cell they share).
 
     Returns arrays ``t, u, code, point (k, 3)`` of the pairs that matter: certain crossings
-    within one shell, and certain or uncertain contacts between two shells.
+    within one shell, certain or uncertain contacts between two shells, and with
+    ``self_contacts`` uncertain contacts within one shell too.
     """
     ts = [np.int64(0) for _ in range(0)]
     us = [np.int64(0) for _ in range(0)]
@@ -179,12 +236,13 @@ def _pair_scan(V, F, shell, lo, hi, i0, n, keys, tris):
                 shared = 0
                 for a in range(3):
                     for b in range(3):
-                        if F[t, a] == F[u, b]:
+                        if ident[F[t, a]] == ident[F[u, b]]:
                             shared += 1
                 if shared >= 2:
                     continue
-                code = _tri_tri(V, F, t, u, shared == 1 and shell[t] == shell[u], X, out)
-                if code == NO or (code == UNSURE and shell[t] == shell[u]):
+                same = shell[t] == shell[u]
+                code = _tri_tri(V, F, ident, t, u, shared == 1 and same, same, X, out)
+                if code == NO or (code == UNSURE and same and (shared or not self_contacts)):
                     continue
                 ts.append(t)
                 us.append(u)
@@ -202,7 +260,12 @@ def _pair_scan(V, F, shell, lo, hi, i0, n, keys, tris):
 
 
 def find_crossings(
-    vertices: np.ndarray, faces: np.ndarray, label: np.ndarray
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    label: np.ndarray,
+    *,
+    identity: np.ndarray | None = None,
+    self_contacts: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Pairs of triangles that cross (within a shell) or may touch (between shells).
 
@@ -212,13 +275,22 @@ def find_crossings(
     faces : numpy.ndarray, shape (m, 3), int64
     label : numpy.ndarray, shape (m,), int64
         Shell of every face (`split_shells`).
+    identity : numpy.ndarray, shape (n,), int64, optional
+        Vertices with equal identity are one point (copies made by
+        `exactgrasp.geometry.topology.split_nonmanifold`): triangles meeting only there share
+        a corner. Default: every vertex its own.
+    self_contacts : bool
+        Also report uncertain contacts within one shell between triangles that share no
+        corner (a surface touching itself, or crossing itself exactly through an edge or a
+        corner).
 
     Returns
     -------
     t, u : numpy.ndarray, shape (k,), int64
         Face indices of each pair found.
     code : numpy.ndarray, shape (k,), int64
-        1: a certain crossing; 2: uncertain contact (only between different shells).
+        1: a certain crossing; 2: uncertain contact (between different shells, or within one
+        with ``self_contacts``).
     point : numpy.ndarray, shape (k, 3), float64
         A point of a certain crossing (NaN for uncertain contacts), in vertex units.
     """
@@ -249,4 +321,11 @@ def find_crossings(
     # By cell, then lower x (the sweep's order), then triangle: sorted here, not in the kernel.
     order = np.lexsort((tris, lo[tris, 0], keys))
     label = np.ascontiguousarray(label, dtype=np.int64)
-    return _pair_scan(V, F, label, lo, hi, i0, n, keys[order], tris[order])
+    ident = (
+        np.arange(len(V), dtype=np.int64)
+        if identity is None
+        else np.ascontiguousarray(identity, dtype=np.int64)
+    )
+    return _pair_scan(
+        V, F, ident, label, bool(self_contacts), lo, hi, i0, n, keys[order], tris[order]
+    )

@@ -34,9 +34,11 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from exactgrasp.errors import MeshError, warn_caller
+from exactgrasp.geometry.arrangement import CutError, winding_layers
 from exactgrasp.geometry.crossings import CROSS, UNSURE, find_crossings
 from exactgrasp.geometry.manifold import to_manifold
-from exactgrasp.geometry.winding import winding_number
+from exactgrasp.geometry.topology import drop_repeated_faces, edge_defects, split_nonmanifold
+from exactgrasp.geometry.winding import winding_number, winding_range_columns
 
 __all__ = ["find_crossings", "resolve_shells", "split_shells"]
 
@@ -83,6 +85,115 @@ def split_shells(faces: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
 
 
 # -- resolution -------------------------------------------------------------------------------
+
+
+def _at(x: np.ndarray) -> str:
+    return f"({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g})"
+
+
+def _crossings(V: np.ndarray, F: np.ndarray, label: np.ndarray):
+    """`find_crossings` with self-contacts, copies of one point counted as one vertex."""
+    _, identity = np.unique(V, axis=0, return_inverse=True)
+    return find_crossings(V, F, label, identity=identity.reshape(-1), self_contacts=True)
+
+
+def _check_self_contact(V, F, mine, t, u, name, s, n_shells) -> None:
+    """A shell whose triangles touch where floating-point signs cannot tell touching from
+    crossing: kept if its winding number stays 0 or 1 (-1 or 0 if reversed) along a grid of
+    vertical lines, refused otherwise (it then passes through itself exactly at an edge or a
+    corner, which is not cut here)."""
+    corners = V[F]
+    lo, hi = corners.reshape(-1, 3).min(0), corners.reshape(-1, 3).max(0)
+    spacing = float(max(hi[0] - lo[0], hi[1] - lo[1])) / 96.0 or 1.0
+    # Lines off the box's simple fractions, where modelled features (and the contacts, often
+    # in a coordinate plane) tend to sit.
+    origin = lo - np.array([0.381966, 0.618034, 0.0]) * spacing
+    shape = np.floor((hi[:2] - origin[:2]) / spacing).astype(np.int64) + 1
+    least, most = winding_range_columns((corners - origin) / spacing, int(shape[0]), int(shape[1]))
+    if most - least <= 1 and least in (-1, 0):
+        return
+    i = int(np.flatnonzero(mine)[0])
+    where = f"shell {s} of {n_shells}" if n_shells > 1 else "the surface"
+    raise MeshError(
+        f"{name}: {where} passes through itself (winding numbers from {least} to {most}) "
+        f"where its triangles meet exactly at an edge or a corner ({int(mine.sum())} triangle "
+        f"pairs, e.g. triangles {int(t[i])} and {int(u[i])} near {_at(V[F].mean((0, 1)))}), "
+        f"which floating-point signs cannot cut; {_SELF_FIX}, or perturb the mesh slightly."
+    )
+
+
+def _untangle(V: np.ndarray, F: np.ndarray, name: str):
+    """Repeated faces dropped, non-manifold edges untangled, self-crossing shells cut into
+    winding-number layers; with the shells and their crossings, and what was done."""
+    actions: list[str] = []
+    G, repeated, cancelled = drop_repeated_faces(F)
+    if repeated or cancelled:
+        actions.append(
+            f"dropped {repeated} repeated and {cancelled} mutually cancelling (reversed) faces"
+        )
+    defects = edge_defects(V, G)
+    if not defects.is_cycle:
+        raise MeshError(
+            f"{name}: not a closed surface ({defects.describe()}), so it bounds no solid; "
+            "close it first (repair=True)."
+        )
+    W = V
+    if defects.nonmanifold:
+        W, G, n_edges, n_split = split_nonmanifold(V, G)
+        actions.append(
+            f"separated the faces of {n_edges} edges shared by more than two faces (e.g. at "
+            f"{_at(defects.nonmanifold_at)}) into pairs bounding one solid wedge each, "
+            f"splitting {n_split} vertices"
+        )
+    n_shells, label = split_shells(G, len(W))
+    t, u, code, point = _crossings(W, G, label)
+    same = label[t] == label[u]
+    cross = same & (code == CROSS)
+    if cross.any():
+        kept = [G[~np.isin(label, label[t[cross]])]]
+        coords = [W]
+        offset = len(W)
+        for s in np.unique(label[t[cross]]):
+            mine = cross & (label[t] == s)
+            faces_s = np.flatnonzero(label == s)
+            local = np.full(len(G), -1)
+            local[faces_s] = np.arange(len(faces_s))
+            Vs, Fs = _compact(W, G[faces_s])
+            where = f"shell {s} of {n_shells}" if n_shells > 1 else "the surface"
+            x = point[np.flatnonzero(mine)[0]]
+            try:
+                layers, n_cut = winding_layers(Vs, Fs, local[t[mine]], local[u[mine]])
+            except CutError as exc:
+                raise MeshError(
+                    f"{name}: {where} ({len(Vs)} vertices, {len(Fs)} triangles) crosses itself "
+                    f"in {int(mine.sum())} triangle pairs (e.g. near {_at(x)}), and near "
+                    f"{_at(exc.point)} {exc.why}, so the crossing cannot be cut with "
+                    f"certainty; {_SELF_FIX}."
+                ) from exc
+            for _, Vk, Fk in layers:
+                coords.append(Vk)
+                kept.append(Fk + offset)
+                offset += len(Vk)
+            kinds = ", ".join(
+                f"w >= {k}" if k > 0 else f"w <= {k} (reversed)" for k, _, _ in layers
+            )
+            actions.append(
+                f"cut {where} ({len(Vs)} vertices, {len(Fs)} triangles), which crosses itself "
+                f"in {int(mine.sum())} triangle pairs (e.g. near {_at(x)}), along its crossings "
+                f"({n_cut} triangles split) into the boundaries of {kinds}"
+            )
+        W = np.concatenate(coords)
+        G = np.concatenate(kept)
+        W, G = _compact(W, G)
+        n_shells, label = split_shells(G, len(W))
+        t, u, code, point = _crossings(W, G, label)
+        same = label[t] == label[u]
+    touch = same & (code == UNSURE)
+    for s in np.unique(label[t[touch]]):
+        _check_self_contact(W, G[label == s], touch & (label[t] == s), t, u, name, s, n_shells)
+    if not actions:
+        return V, F, label, n_shells, t, u, code, actions
+    return W, G, label, n_shells, t, u, code, actions
 
 
 def _signed_volumes(V: np.ndarray, F: np.ndarray, label: np.ndarray, n: int) -> np.ndarray:
@@ -146,23 +257,12 @@ def resolve_shells(
         A shell whose surface crosses itself; shells whose relation has no resolution here
         (see the module docstring); an inside-out shell with ``orientation="refuse"``.
     """
+    vertices_in, faces_in = vertices, faces
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
-    n_shells, label = split_shells(F, len(V))
-    t, u, code, point = find_crossings(V, F, label)
-    same = label[t] == label[u]
-    if same.any():
-        bad = int(label[t[same][0]])
-        mine = same & (label[t] == bad)
-        x = point[np.flatnonzero(mine)[0]]
-        nv = len(np.unique(F[label == bad]))
-        where = f"shell {bad} of {n_shells} " if n_shells > 1 else "the surface "
-        raise MeshError(
-            f"{name}: {where}({nv} vertices, {int((label == bad).sum())} triangles) crosses "
-            f"itself: {int(mine.sum())} pairs of its triangles cross, e.g. triangles "
-            f"{int(t[mine][0])} and {int(u[mine][0])} near ({x[0]:.6g}, {x[1]:.6g}, "
-            f"{x[2]:.6g}), so it has no well-defined inside; {_SELF_FIX}."
-        )
+    V, F, label, n_shells, t, u, code, untangled = _untangle(V, F, name)
+    if untangled:
+        vertices, faces = V, F
     volumes = _signed_volumes(V, F, label, n_shells)
     total = float(volumes.sum())
     report: dict[str, Any] = {
@@ -170,15 +270,20 @@ def resolve_shells(
         "shells": [],
         "crossing_pairs": int((code == CROSS).sum()),
         "touching_pairs": int((code == UNSURE).sum()),
-        "actions": [],
+        "actions": list(untangled),
         "volume_before": total,
         "volume_after": total,
     }
+    if untangled:
+        report["volume_before"] = _signed_volume(vertices_in, faces_in)
     if n_shells == 1:
         report["shells"] = [
             {"index": 0, "vertices": len(np.unique(F)), "faces": len(F), "volume": total,
              "role": "outer"}
         ]  # fmt: skip
+        if untangled:
+            report["volume_after"] = total
+            _warn_resolved(name, n_shells, report, warn)
         return vertices, faces, report
     return _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn, report)
 
@@ -215,7 +320,7 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
         x = parts[members[c][0]][0][0]
         near = np.flatnonzero(np.all(lo <= x, axis=1) & np.all(x <= hi, axis=1))
         holders.append([int(j) for j in near if cluster[j] != c and inside(x, j)])
-    actions: list[str] = []
+    actions: list[str] = report["actions"]
     # Inside-out bodies: a cluster of reversed shells held by nothing, with what it holds.
     top_inverted = [
         c for c in range(n_clusters) if not holders[c] and np.all(sign[members[c]] < 0)
@@ -251,7 +356,7 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
         )
 
     out: list[tuple[np.ndarray, np.ndarray]] = []
-    changed = bool(top_inverted)
+    changed = bool(top_inverted) or bool(actions)
     for c in range(n_clusters):
         idx = members[c]
         signs = sign[idx]
@@ -348,12 +453,22 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
             f"{name}: resolving its {n_shells} shells leaves no solid (every shell is "
             "redundant); check the orientation of its shells."
         )
-    after = float(_signed_volumes(new_v, new_f, np.zeros(len(new_f), np.int64), 1)[0])
-    report["volume_after"] = after
-    message = (
-        f"{name}: {n_shells} shells; " + "; ".join(actions) + f". Volume "
-        f"{report['volume_before']:.6g} -> {after:.6g} m^3 (the solid is the set of points of "
-        "winding number >= 1)."
-    )
-    (warn or warn_caller)(message)
+    report["volume_after"] = _signed_volume(new_v, new_f)
+    _warn_resolved(name, n_shells, report, warn)
     return new_v, new_f, report
+
+
+def _signed_volume(V: np.ndarray, F: np.ndarray) -> float:
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    return float(_signed_volumes(V, F, np.zeros(len(F), np.int64), 1)[0])
+
+
+def _warn_resolved(name: str, n_shells: int, report: dict[str, Any], warn) -> None:
+    """The one warning of a mesh that was changed: every action, the volume before and after."""
+    shells = f"{n_shells} shells" if n_shells > 1 else "1 shell"
+    (warn or warn_caller)(
+        f"{name}: {shells}; " + "; ".join(report["actions"]) + f". Volume "
+        f"{report['volume_before']:.6g} -> {report['volume_after']:.6g} m^3 (the solid is the "
+        "set of points of winding number >= 1)."
+    )

@@ -28,6 +28,7 @@ from exactgrasp.geometry.intake import (
     unit_scale,
 )
 from exactgrasp.geometry.shells import resolve_shells
+from exactgrasp.geometry.topology import EdgeDefects, drop_repeated_faces, edge_defects
 
 __all__ = [
     "MAX_PLAUSIBLE_SIZE_M",
@@ -42,9 +43,11 @@ __all__ = [
 class Solid:
     """A closed, consistently oriented triangle mesh of positive volume, in metres.
 
-    A mesh of several closed shells is read as the solid they bound: disjoint bodies and
-    cavities are kept, overlapping or redundant shells are merged with a warning, a shell
-    that crosses itself is refused (see `exactgrasp.geometry.shells` and ``docs/solids.md``).
+    Any closed surface is read as the solid it bounds, the points of winding number >= 1:
+    disjoint bodies and cavities are kept as they are; overlapping or redundant shells,
+    edges shared by four or more faces, repeated faces and shells that cross themselves are
+    resolved into that solid with one warning (see `exactgrasp.geometry.shells` and
+    ``docs/solids.md``).
 
     Parameters
     ----------
@@ -81,10 +84,8 @@ class Solid:
         `exactgrasp.geometry.shells.resolve_shells`): ``n_shells``, per-shell ``shells``
         (vertex and face counts, signed volume, role: outer, cavity, island, merged, redundant,
         flipped), ``crossing_pairs``, ``touching_pairs``, ``actions`` (empty when the mesh
-        was kept as is), ``volume_before``, ``volume_after`` (m^3). Overlapping shells are
-        merged into the solid they bound (points of winding number >= 1), with a warning;
-        a shell crossing itself is refused. A rigid copy (`transformed`) keeps its
-        original's report.
+        was kept as is), ``volume_before``, ``volume_after`` (m^3). A rigid copy
+        (`transformed`) keeps its original's report.
     """
 
     def __init__(
@@ -112,9 +113,13 @@ class Solid:
         # Exact duplicates only: STL stores every triangle's corners separately.
         mesh.merge_vertices(merge_tex=True, merge_norm=True, digits_vertex=None)
         self.repair_report: dict[str, Any] | None = None
-        if repair:
+        defects = edge_defects(mesh.vertices, drop_repeated_faces(mesh.faces)[0])
+        # A closed surface with edges of four faces bounds a solid as it is: repair is for
+        # open or inconsistently oriented surfaces only.
+        if repair and not (defects.is_cycle and defects.nonmanifold):
             mesh = self._repair(mesh)
-        self._check_closed(mesh)
+            defects = edge_defects(mesh.vertices, drop_repeated_faces(mesh.faces)[0])
+        self._check_closed(defects)
         # Before the orientation check: one inside-out shell among several is not an
         # inside-out mesh, and overlapping shells make the signed volume meaningless.
         V, F, self.shell_report = resolve_shells(
@@ -218,20 +223,17 @@ class Solid:
                 f"(first at index {int(np.argmax(bad))}); fix or remove them in the source mesh."
             )
 
-    def _check_closed(self, mesh: trimesh.Trimesh) -> None:
-        if not mesh.is_watertight:
-            edges = mesh.edges_sorted
-            _, counts = np.unique(edges, axis=0, return_counts=True)
-            n_open = int(np.sum(counts != 2))
+    def _check_closed(self, defects: EdgeDefects) -> None:
+        if defects.open:
             raise MeshError(
-                f"{self.name}: not a closed surface ({n_open} edges are not shared by exactly "
-                "two triangles), so it has no inside and no volume; pass repair=True to let "
-                "trimesh and pymeshfix close it, or fix the mesh in a modeller."
+                f"{self.name}: not a closed surface ({defects.describe()}), so it has no "
+                "inside and no volume; pass repair=True to let trimesh and pymeshfix close it, "
+                "or fix the mesh in a modeller."
             )
-        if not mesh.is_winding_consistent:
+        if defects.misoriented:
             raise MeshError(
-                f"{self.name}: triangles are not consistently oriented (neighbours disagree on "
-                "which side is outside); pass repair=True to fix the winding."
+                f"{self.name}: triangles are not consistently oriented ({defects.describe()}); "
+                "pass repair=True to fix the winding."
             )
 
     def _check_orientation(self, mesh: trimesh.Trimesh, orientation: str) -> trimesh.Trimesh:

@@ -19,6 +19,7 @@ from exactgrasp.errors import MeshError, ModelError, warn_caller
 from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
 from exactgrasp.geometry.solid import Solid
+from exactgrasp.geometry.topology import drop_repeated_faces, edge_defects
 
 __all__ = [
     "GEOM_BOX",
@@ -59,11 +60,16 @@ JOINT_FREE, JOINT_BALL, JOINT_SLIDE, JOINT_HINGE = range(4)
 
 
 def weld_mesh(
-    V: np.ndarray, F: np.ndarray, what: str, repairs: list[str] | None = None
+    V: np.ndarray,
+    F: np.ndarray,
+    what: str,
+    repairs: list[str] | None = None,
+    resolved: list[str] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Merge duplicate vertices, drop collapsed faces, check the mesh is closed, and resolve
-    its shells (`exactgrasp.geometry.shells.resolve_shells`: overlapping shells merged with a
-    warning, a self-crossing shell refused with a `ModelError`).
+    """Merge duplicate vertices, drop collapsed and repeated faces, check the mesh bounds a
+    solid, and resolve it (`exactgrasp.geometry.shells.resolve_shells`: overlapping shells,
+    edges of four faces and self-crossing shells resolved into the solid of winding number
+    >= 1, with a warning).
 
     MuJoCo keeps vertices split where normals differ and stores them in float32, so a closed
     mesh file comes out of a compiled model open: copies of one vertex are identical or a
@@ -82,6 +88,9 @@ def weld_mesh(
     repairs : list of str, optional
         Given: a mesh still open after welding is repaired (`repair_mesh`) and a line saying
         what changed is appended. None: it is refused.
+    resolved : list of str, optional
+        Given: what resolving the mesh into its solid changed is appended here (for one
+        warning per model). None: it is warned about at once.
 
     Returns
     -------
@@ -101,23 +110,27 @@ def weld_mesh(
     F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])]
     if len(F) == 0:
         raise ModelError(f"{what} has no faces")
-    edges = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    key = edges[:, 0] * len(V) + edges[:, 1]
-    reverse = edges[:, 1] * len(V) + edges[:, 0]
-    if len(np.unique(key)) != len(key) or not np.isin(reverse, key).all():
+    F, _, _ = drop_repeated_faces(F)
+    defects = edge_defects(V, F)
+    if not defects.is_cycle:
         if repairs is not None:
             return repair_mesh(V, F, what, repairs)
-        n_open = int(np.count_nonzero(~np.isin(reverse, key)))
         raise ModelError(
-            f"{what} is not a closed, consistently oriented surface even after merging "
-            f"duplicate vertices ({n_open} edges without an opposite); pass repair=True "
-            "(to load_model, Hand.from_mjcf or Hand.from_urdf) to close it as "
-            "Solid(repair=True) does, repair the mesh file, or use a primitive geom instead"
+            f"{what} is not a closed surface, even after merging duplicate vertices "
+            f"({defects.describe()}); pass repair=True (to load_model, Hand.from_mjcf or "
+            "Hand.from_urdf) to close it as Solid(repair=True) does, repair the mesh file, or "
+            "use a primitive geom instead"
         )
     try:
         # Once per mesh asset, at compile time: posing moves links rigidly, so a resolved
         # link stays resolved in every joint configuration.
-        V, F, _ = resolve_shells(V, F, what, orientation="flip", warn=warn_caller)
+        V, F, _ = resolve_shells(
+            V,
+            F,
+            what,
+            orientation="flip",
+            warn=warn_caller if resolved is None else resolved.append,
+        )
     except MeshError as exc:
         raise ModelError(str(exc)) from None
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
@@ -171,11 +184,16 @@ def repair_mesh(
 
 
 def geom_mesh(
-    mj_model, g: int, tessellation: int, what: str, repairs: list[str] | None = None
+    mj_model,
+    g: int,
+    tessellation: int,
+    what: str,
+    repairs: list[str] | None = None,
+    resolved: list[str] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Closed mesh ``(V (n, 3) m, F (m, 3))`` of geom ``g`` in the geom's own frame.
 
-    ``repairs`` as in `weld_mesh` (mesh geoms only; primitives are closed).
+    ``repairs`` and ``resolved`` as in `weld_mesh` (mesh geoms only; primitives are closed).
     """
     kind, size = int(mj_model.geom_type[g]), mj_model.geom_size[g]
     if kind == GEOM_MESH:
@@ -183,7 +201,7 @@ def geom_mesh(
         va, vn = mj_model.mesh_vertadr[k], mj_model.mesh_vertnum[k]
         fa, fn = mj_model.mesh_faceadr[k], mj_model.mesh_facenum[k]
         V, F = mj_model.mesh_vert[va : va + vn], mj_model.mesh_face[fa : fa + fn]
-        return weld_mesh(V, F, what, repairs)
+        return weld_mesh(V, F, what, repairs, resolved)
     if kind == GEOM_BOX:
         return primitives.box(size)
     if kind == GEOM_SPHERE:
@@ -276,6 +294,7 @@ def collect_geoms(
         per_body.setdefault(int(m.geom_bodyid[g]), []).append(g)
     geoms = []
     repairs: list[str] | None = [] if repair else None
+    resolved: list[str] = []
     welded = {}  # one weld per mesh asset, however many geoms use it
     for b, gs in per_body.items():
         for g in gs:
@@ -284,11 +303,16 @@ def collect_geoms(
             what = f"{source}: mesh geom {m.geom(g).name or g!r} of body {body!r}"
             key = int(m.geom_dataid[g]) if m.geom_type[g] == GEOM_MESH else None
             if key is None or key not in welded:
-                V, F = geom_mesh(m, g, tessellation, what, repairs)
+                V, F = geom_mesh(m, g, tessellation, what, repairs, resolved)
                 if key is not None:
                     welded[key] = V, F
             V, F = welded[key] if key is not None else (V, F)
             geoms.append((name, g, V, F))
+    if resolved:
+        warn_caller(
+            f"{source}: resolved {len(resolved)} mesh geom(s) into the solids they bound: "
+            + " | ".join(line.removeprefix(f"{source}: ") for line in resolved)
+        )
     if repairs:
         warn_caller(
             f"{source}: repaired {len(repairs)} mesh geom(s) (repair=True): "

@@ -1,0 +1,273 @@
+"""Edges of a triangle mesh: whether it bounds a solid, and its non-manifold edges untangled.
+
+A triangle mesh bounds a solid (its winding number is an integer off the surface) exactly when
+every edge is used as often in one direction as in the other: a *closed cycle*. That admits
+edges shared by four or more faces (two parts of a link touching along an edge), which a
+2-manifold check refuses. This module
+
+* counts and locates what keeps a mesh from being a cycle (`edge_defects`): edges of one face
+  (holes) and edges used twice in one direction (neighbours that disagree on the outside);
+* drops faces that bound nothing: a face repeated with the same orientation is kept once, a
+  face and its reverse cancel (`drop_repeated_faces`);
+* turns a cycle into an oriented 2-manifold without moving a vertex (`split_nonmanifold`):
+  around an edge of more than two faces, each face is paired with the neighbour that bounds
+  the same solid wedge, and a vertex whose faces then form several fans becomes one vertex
+  per fan. The solid is unchanged; its surface may touch itself where it did before.
+
+Imports numpy and scipy only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+__all__ = ["EdgeDefects", "drop_repeated_faces", "edge_defects", "split_nonmanifold"]
+
+
+@dataclass(frozen=True)
+class EdgeDefects:
+    """What keeps a mesh from being a closed cycle, and where.
+
+    Attributes
+    ----------
+    open : int
+        Edges used an odd number of times (an edge of one face: a hole's rim).
+    misoriented : int
+        Edges used an even number of times but not as often in each direction (two
+        neighbouring faces disagree on which side is outside).
+    nonmanifold : int
+        Edges shared by more than two faces (accepted: they still bound a solid).
+    open_at, misoriented_at, nonmanifold_at : numpy.ndarray, shape (3,), or None
+        The midpoint of the first such edge, in vertex units.
+    """
+
+    open: int
+    misoriented: int
+    nonmanifold: int
+    open_at: np.ndarray | None
+    misoriented_at: np.ndarray | None
+    nonmanifold_at: np.ndarray | None
+
+    @property
+    def is_cycle(self) -> bool:
+        """Every edge used as often in each direction: the mesh bounds a solid."""
+        return self.open == 0 and self.misoriented == 0
+
+    def describe(self) -> str:
+        """The defects in words, with a location each (for messages)."""
+        parts = []
+        for count, where, what in (
+            (self.open, self.open_at, "belong to an odd number of faces (holes)"),
+            (
+                self.misoriented,
+                self.misoriented_at,
+                "are used twice in the same direction (neighbouring faces disagree on "
+                "which side is outside)",
+            ),
+        ):
+            if count:
+                parts.append(f"{count} edges {what}, e.g. at {_point(where)}")
+        return "; ".join(parts)
+
+
+def _point(x: np.ndarray | None) -> str:
+    return "?" if x is None else f"({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g})"
+
+
+def _half_edges(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Tail and head vertex of each face's three edges, in order (3 m,): half-edge 3f+i runs
+    from corner i to corner i+1 of face f."""
+    tail = F.reshape(-1)
+    head = F[:, [1, 2, 0]].reshape(-1)
+    return tail, head
+
+
+def _edge_keys(F: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
+    """Undirected key of each half-edge and +1/-1 for its direction (low to high vertex)."""
+    tail, head = _half_edges(F)
+    lo = np.minimum(tail, head)
+    hi = np.maximum(tail, head)
+    return lo * np.int64(n_vertices) + hi, np.where(tail < head, 1, -1)
+
+
+def edge_defects(vertices: np.ndarray, faces: np.ndarray) -> EdgeDefects:
+    """Count and locate the edges that keep a mesh from bounding a solid.
+
+    Parameters
+    ----------
+    vertices : numpy.ndarray, shape (n, 3), float64
+        With duplicates already merged (an STL's separate corners would all look open).
+    faces : numpy.ndarray, shape (m, 3), int64
+
+    Returns
+    -------
+    EdgeDefects
+    """
+    V = np.asarray(vertices, dtype=np.float64)
+    F = np.asarray(faces, dtype=np.int64)
+    key, sign = _edge_keys(F, len(V))
+    uniq, inverse, uses = np.unique(key, return_inverse=True, return_counts=True)
+    balance = np.bincount(inverse, sign, minlength=len(uniq))
+    odd = uses % 2 == 1
+    skew = ~odd & (balance != 0)
+    many = uses > 2
+
+    def at(mask: np.ndarray) -> np.ndarray | None:
+        if not mask.any():
+            return None
+        k = int(uniq[np.argmax(mask)])
+        return 0.5 * (V[k // len(V)] + V[k % len(V)])
+
+    return EdgeDefects(
+        open=int(odd.sum()),
+        misoriented=int(skew.sum()),
+        nonmanifold=int(many.sum()),
+        open_at=at(odd),
+        misoriented_at=at(skew),
+        nonmanifold_at=at(many),
+    )
+
+
+def drop_repeated_faces(faces: np.ndarray) -> tuple[np.ndarray, int, int]:
+    """Faces that bound something: repeats kept once, a face and its reverse cancelled.
+
+    Parameters
+    ----------
+    faces : numpy.ndarray, shape (m, 3), int64
+
+    Returns
+    -------
+    faces : numpy.ndarray, shape (m', 3), int64
+        In input order (the input itself when nothing was dropped).
+    repeated : int
+        Faces dropped as repeats of a face of the same orientation.
+    cancelled : int
+        Faces dropped in pairs with their reverse.
+    """
+    F = np.asarray(faces, dtype=np.int64)
+    if len(F) == 0:
+        return F, 0, 0
+    # A face's corners rotated to start at its smallest index keep its orientation.
+    start = np.argmin(F, axis=1)
+    rows = np.arange(len(F))[:, None]
+    rotated = F[rows, (start[:, None] + np.arange(3)) % 3]
+    even = rotated[:, 1] < rotated[:, 2]
+    canon = np.where(even[:, None], rotated, rotated[:, [0, 2, 1]])
+    _, group, counts = np.unique(canon, axis=0, return_inverse=True, return_counts=True)
+    group = group.reshape(-1)
+    if counts.max() == 1:
+        return F, 0, 0
+    up = np.bincount(group, even.astype(np.int64), minlength=len(counts))
+    down = counts - up
+    net = up - down
+    keep = np.zeros(len(F), bool)
+    # One face per group whose orientations do not cancel, of the winning orientation.
+    winner = np.where(net > 0, True, False)
+    candidate = (even == winner[group]) & (net[group] != 0)
+    first = np.full(len(counts), len(F))
+    np.minimum.at(first, group[candidate], np.flatnonzero(candidate))
+    keep[first[first < len(F)]] = True
+    cancelled = int(2 * np.minimum(up, down).sum())
+    repeated = int(len(F) - keep.sum() - cancelled)
+    return F[keep], repeated, cancelled
+
+
+def _wedge_pairs(V: np.ndarray, F: np.ndarray, halves: np.ndarray, a: int, b: int) -> list:
+    """Pair the half-edges of one non-manifold edge (a < b) so that each pair bounds one solid
+    wedge: going counter-clockwise around a -> b, from a face using b -> a to the next face
+    using a -> b. Returns (forward, backward) half-edge pairs."""
+    tail, _ = _half_edges(F)
+    d = V[b] - V[a]
+    d = d / np.linalg.norm(d)
+    x = np.cross(d, np.eye(3)[np.argmin(np.abs(d))])
+    x /= np.linalg.norm(x)
+    y = np.cross(d, x)
+    face = halves // 3
+    third = F[face, (halves % 3 + 2) % 3]
+    u = V[third] - V[a]
+    angle = np.arctan2(u @ y, u @ x)
+    forward = tail[halves] == a
+    order = np.argsort(angle, kind="stable")
+    # Opening (b -> a) and closing (a -> b) faces matched like brackets around the circle,
+    # starting just after the lowest running balance so that no closing face comes first.
+    step = np.where(forward[order], -1, 1)
+    start = (int(np.argmin(np.cumsum(step))) + 1) % len(order)
+    ring = np.roll(order, -start)
+    stack: list[int] = []
+    pairs = []
+    for h in ring:
+        if not forward[h]:
+            stack.append(int(halves[h]))
+        elif stack:
+            pairs.append((int(halves[h]), stack.pop()))
+    return pairs
+
+
+def split_nonmanifold(
+    vertices: np.ndarray, faces: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """The same solid as an oriented 2-manifold: non-manifold edges and vertices untangled.
+
+    Parameters
+    ----------
+    vertices : numpy.ndarray, shape (n, 3), float64
+    faces : numpy.ndarray, shape (m, 3), int64
+        A closed cycle (`edge_defects(...).is_cycle`).
+
+    Returns
+    -------
+    vertices : numpy.ndarray, shape (n', 3), float64
+        The input's, with copies of the vertices that were split (unused ones dropped).
+    faces : numpy.ndarray, shape (m, 3), int64
+        The same faces, in order, on the new vertex indices.
+    nonmanifold_edges : int
+        Edges of more than two faces that were paired up.
+    split_vertices : int
+        Vertices that became several.
+    """
+    V = np.asarray(vertices, dtype=np.float64)
+    F = np.asarray(faces, dtype=np.int64)
+    m = len(F)
+    key, sign = _edge_keys(F, len(V))
+    order = np.lexsort((-sign, key))  # per edge: forward halves first
+    sorted_key = key[order]
+    bounds = np.flatnonzero(np.r_[True, sorted_key[1:] != sorted_key[:-1], True])
+    uses = np.diff(bounds)
+    twin_a: list[np.ndarray] = []
+    twin_b: list[np.ndarray] = []
+    simple = uses == 2
+    first = bounds[:-1][simple]
+    twin_a.append(order[first])
+    twin_b.append(order[first + 1])
+    crowded = np.flatnonzero(uses > 2)
+    nm_pairs = []
+    for e in crowded:
+        halves = order[bounds[e] : bounds[e + 1]]
+        k = int(sorted_key[bounds[e]])
+        nm_pairs += _wedge_pairs(V, F, halves, k // len(V), k % len(V))
+    if nm_pairs:
+        pairs = np.array(nm_pairs, np.int64)
+        twin_a.append(pairs[:, 0])
+        twin_b.append(pairs[:, 1])
+    ha = np.concatenate(twin_a)
+    hb = np.concatenate(twin_b)
+    # Corner 3f+i sits at the tail of half-edge 3f+i. Twins run opposite ways, so each twin's
+    # tail corner joins the other's head corner.
+    head_a = (ha // 3) * 3 + (ha % 3 + 1) % 3
+    head_b = (hb // 3) * 3 + (hb % 3 + 1) % 3
+    rows = np.concatenate([ha, hb])
+    cols = np.concatenate([head_b, head_a])
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), (3 * m, 3 * m))
+    n_fans, fan = connected_components(graph, directed=False)
+    vertex_of_fan = np.empty(n_fans, np.int64)
+    vertex_of_fan[fan] = F.reshape(-1)
+    if n_fans == len(np.unique(F)) and not nm_pairs:
+        return V, F, 0, 0
+    new_faces = fan.reshape(m, 3).astype(np.int64)
+    counts = np.bincount(vertex_of_fan, minlength=len(V))
+    split_vertices = int((counts > 1).sum())
+    return np.ascontiguousarray(V[vertex_of_fan]), new_faces, len(crowded), split_vertices
