@@ -271,6 +271,7 @@ def resolve_shells(
         "crossing_pairs": int((code == CROSS).sum()),
         "touching_pairs": int((code == UNSURE).sum()),
         "actions": list(untangled),
+        "untangled": len(untangled),
         "volume_before": total,
         "volume_after": total,
     }
@@ -466,9 +467,11 @@ def _signed_volume(V: np.ndarray, F: np.ndarray) -> float:
 
 def _warn_resolved(name: str, n_shells: int, report: dict[str, Any], warn) -> None:
     """The one warning of a mesh that was changed: every action, the volume before and after."""
-    shells = f"{n_shells} shells" if n_shells > 1 else "1 shell"
+    # A mesh that was untangled or cut first is named by what was done to it, since its
+    # shells are those of the result.
+    shells = "" if report["untangled"] else f"{n_shells} shells; "
     (warn or warn_caller)(
-        f"{name}: {shells}; " + "; ".join(report["actions"]) + f". Volume "
+        f"{name}: {shells}" + "; ".join(report["actions"]) + f". Volume "
         f"{report['volume_before']:.6g} -> {report['volume_after']:.6g} m^3 (the solid is the "
         "set of points of winding number >= 1)."
     )
