@@ -1,10 +1,22 @@
-"""`LRUCache`: the one keyed-cache idiom of exactgrasp (imports nothing from exactgrasp)."""
+"""The keyed caches of exactgrasp: `LRUCache` in memory, `DiskCache` of arrays on disk.
+
+Imports nothing from exactgrasp but `exactgrasp.version`.
+"""
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
+import tempfile
 from collections import OrderedDict
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Iterable
+from pathlib import Path
 from typing import Any
+
+import numpy as np
+
+from exactgrasp.version import __version__
 
 
 class LRUCache:
@@ -45,3 +57,77 @@ class LRUCache:
     def clear(self) -> None:
         """Drop every value."""
         self._store.clear()
+
+
+def cache_root() -> Path:
+    """The folder of exactgrasp's disk caches: ``EXACTGRASP_CACHE``, else
+    ``$XDG_CACHE_HOME/exactgrasp``, else ``~/.cache/exactgrasp``."""
+    explicit = os.environ.get("EXACTGRASP_CACHE")
+    if explicit:
+        return Path(explicit).expanduser()
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base).expanduser() / "exactgrasp"
+
+
+class DiskCache:
+    """Arrays and a JSON record kept on disk under a key of the inputs' content.
+
+    Each entry is one ``.npz`` file (no pickles), written to a temporary name and renamed, so
+    processes that share the folder (batch workers) never read half an entry. Keys include
+    the package version: an upgrade starts afresh. An unreadable or unwritable cache is
+    skipped, never an error.
+
+    Parameters
+    ----------
+    kind : str
+        Subfolder, and part of every key (``"solids"``).
+    """
+
+    def __init__(self, kind: str):
+        self.kind = kind
+
+    def key(self, parts: Iterable[bytes | str | np.ndarray]) -> str:
+        """SHA-256 (hex) of the version, the kind and each part (array bytes with dtype and
+        shape)."""
+        digest = hashlib.sha256(f"{__version__}/{self.kind}".encode())
+        for part in parts:
+            if isinstance(part, np.ndarray):
+                array = np.ascontiguousarray(part)
+                digest.update(f"{array.dtype.str}{array.shape}".encode())
+                digest.update(array.tobytes())
+            else:
+                digest.update(part.encode() if isinstance(part, str) else part)
+            digest.update(b"|")
+        return digest.hexdigest()
+
+    def _path(self, key: str) -> Path:
+        return cache_root() / self.kind / f"{key}.npz"
+
+    def get(
+        self, key: str, build: Callable[[], tuple[dict[str, np.ndarray], dict[str, Any]]]
+    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """The ``(arrays, record)`` stored under ``key``, built with ``build()`` (and stored)
+        when missing."""
+        path = self._path(key)
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                arrays = {name: data[name] for name in data.files if name != "__record__"}
+                record = json.loads(str(data["__record__"]))
+            return arrays, record
+        except (OSError, ValueError, KeyError):
+            pass
+        arrays, record = build()
+        tmp = None
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            handle, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+            with os.fdopen(handle, "wb") as out:
+                np.savez(out, __record__=np.array(json.dumps(record)), **arrays)
+            os.replace(tmp, path)
+            tmp = None
+        except OSError:
+            pass
+        finally:
+            if tmp is not None and os.path.exists(tmp):
+                os.remove(tmp)
+        return arrays, record

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,9 @@ import pytest
 from exactgrasp.datapath import data_dir
 
 os.environ.setdefault("EXACTGRASP_NO_PROGRESS", "1")
+# The disk caches of one test run start empty and stay out of the user's cache folder (set
+# here, before any test, so that worker processes inherit it).
+os.environ["EXACTGRASP_CACHE"] = tempfile.mkdtemp(prefix="exactgrasp-test-cache-")
 
 #: ``$EXACTGRASP_DATA``, else ``../shared/data`` beside the repository (`data_dir`).
 SHARED_DATA = data_dir()

@@ -54,31 +54,43 @@ class CutError(Exception):
 
 
 def _det(a, b, c, d) -> float:
-    return float(np.dot(a - d, np.cross(b - d, c - d)))
+    """Six times the signed volume of tetrahedron abcd (points as 3-lists of floats)."""
+    ax, ay, az = a[0] - d[0], a[1] - d[1], a[2] - d[2]
+    bx, by, bz = b[0] - d[0], b[1] - d[1], b[2] - d[2]
+    cx, cy, cz = c[0] - d[0], c[1] - d[1], c[2] - d[2]
+    return ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
 
 
 class _Points:
     """The cut's vertices: the shell's own, then each intersection point once, by key."""
 
-    def coords_array(self) -> np.ndarray:
-        return np.array(self.coords)
-
     def __init__(self, V: np.ndarray):
-        self.coords: list[np.ndarray] = [row for row in V]
+        self.base = V
+        self.n = len(V)
+        self.extra: list[np.ndarray] = []
         self.index: dict[tuple, int] = {}
+
+    def __getitem__(self, i: int) -> np.ndarray:
+        return self.base[i] if i < self.n else self.extra[i - self.n]
 
     def add(self, key: tuple, make) -> int:
         i = self.index.get(key)
         if i is None:
-            i = len(self.coords)
-            self.coords.append(np.asarray(make(), dtype=np.float64))
+            i = self.n + len(self.extra)
+            self.extra.append(np.asarray(make(), dtype=np.float64))
             self.index[key] = i
         return i
+
+    def array(self) -> np.ndarray:
+        if not self.extra:
+            return self.base
+        return np.concatenate([self.base, np.array(self.extra)])
 
 
 def _pierce(V, p, q, tri, bound):
     """Where segment V[p] V[q] passes through the interior of triangle ``tri``: its parameter
-    along the segment, None when it certainly does not, or `CutError` when uncertain."""
+    along the segment, None when it certainly does not, or `CutError` when uncertain. ``V``
+    holds the points as lists of floats."""
     a, b, c = V[tri[0]], V[tri[1]], V[tri[2]]
     P, Q = V[p], V[q]
     dp, dq = _det(a, b, c, P), _det(a, b, c, Q)
@@ -93,7 +105,10 @@ def _pierce(V, p, q, tri, bound):
     if max(s) > 0 and min(s) < 0:
         return None
     if sp == 0 or sq == 0 or 0 in s:
-        raise CutError("an edge passes through or touches a corner or edge", 0.5 * (P + Q))
+        raise CutError(
+            "an edge passes through or touches a corner or edge",
+            0.5 * (np.asarray(P) + np.asarray(Q)),
+        )
     return dp / (dp - dq)
 
 
@@ -101,6 +116,8 @@ def _segments(V, F, t, u, points):
     """For each crossing pair: the segment's two point indices, in both faces' lists."""
     per_face: dict[int, list[tuple[int, int, int]]] = {}
     on_edge: dict[tuple[int, int], set[int]] = {}
+    Vl = V.tolist()
+    Fl = F.tolist()
     for A, B in zip(t.tolist(), u.tolist(), strict=True):
         fa, fb = F[A], F[B]
         shared = set(fa.tolist()) & set(fb.tolist())
@@ -113,7 +130,7 @@ def _segments(V, F, t, u, points):
                 p, q = int(X[i]), int(X[(i + 1) % 3])
                 if p in shared or q in shared:
                     continue
-                lam = _pierce(V, p, q, F[Y], bound)
+                lam = _pierce(Vl, p, q, Fl[Y], bound)
                 if lam is None:
                     continue
                 edge = (min(p, q), max(p, q))
@@ -231,13 +248,13 @@ def _split_face(V, F, f, segs, on_edge, points) -> np.ndarray:
     import manifold3d
 
     corners = [int(c) for c in F[f]]
-    a, b, c = (points.coords[i] for i in corners)
+    a, b, c = (points[i] for i in corners)
     normal = np.cross(b - a, c - a)
     drop = int(np.argmax(np.abs(normal)))
     keep = [ax for ax in range(3) if ax != drop]
 
     def flat(i):
-        return points.coords[i][keep]
+        return points[i][keep]
 
     # Segments crossing inside this face: the three planes' point, a vertex of all three.
     pieces = [[s0, s1] for s0, s1, _ in segs]
@@ -281,8 +298,10 @@ def _split_face(V, F, f, segs, on_edge, points) -> np.ndarray:
         flat_ids = [order[i] for loop in loops for i in loop]
         out.append(np.asarray(flat_ids, np.int64)[np.asarray(tris, np.int64)])
     tris = np.concatenate(out) if out else np.empty((0, 3), np.int64)
-    P = points.coords_array()
-    cross = np.cross(P[tris[:, 1]] - P[tris[:, 0]], P[tris[:, 2]] - P[tris[:, 0]])
+    local_ids = {g: i for i, g in enumerate(order)}
+    P = np.array([points[g] for g in order])
+    L = np.vectorize(local_ids.__getitem__, otypes=[np.int64])(tris) if len(tris) else tris
+    cross = np.cross(P[L[:, 1]] - P[L[:, 0]], P[L[:, 2]] - P[L[:, 0]])
     total = float(np.linalg.norm(normal))
     if abs(float(np.sum(cross @ normal)) / total - total) > 1e-9 * total or np.any(
         cross @ normal < -1e-12 * total * total
@@ -334,7 +353,7 @@ def winding_layers(
     new_faces = [F[np.setdiff1d(np.arange(len(F)), list(per_face))]]
     for f, segs in per_face.items():
         new_faces.append(_split_face(V, F, f, segs, on_edge, points))
-    P = points.coords_array()
+    P = points.array()
     G = np.concatenate(new_faces)
     # Patches: faces joined across edges of exactly two faces (crossing curves have four).
     n = len(P)

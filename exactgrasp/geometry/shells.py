@@ -391,16 +391,17 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
         pairs = int(np.isin(la, idx).sum())
         crossing = int(((code == CROSS) & np.isin(la, idx)).sum())
         how = f"{crossing} crossing and {pairs - crossing} touching triangle pairs"
+        why = ""
         if neg and pos:
             if w != 0:
-                raise refuse(c, "mix crossing outward and reversed shells inside another shell")
+                why = "mix crossing outward and reversed shells inside another shell"
             pos_set = set(pos)
             overlapping_pos = any(
                 label[a] in pos_set and label[b] in pos_set and label[a] != label[b]
                 for a, b in zip(t[np.isin(la, idx)], u[np.isin(la, idx)], strict=True)
             ) or any(inside(parts[i][0][0], j) for i in pos for j in pos if i != j)
             if overlapping_pos:
-                raise refuse(c, "mix reversed shells with outward shells that overlap")
+                why = "mix reversed shells with outward shells that overlap"
         elif (pos and w >= 1) or (neg and w <= 0):
             for i in idx:
                 shells[int(i)]["role"] = "redundant"
@@ -410,7 +411,19 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
             )
             continue
         elif (pos and w < 0) or (neg and w >= 2):
-            raise refuse(c, f"cross each other where the winding number around them is {w}")
+            why = f"cross each other where the winding number around them is {w}"
+        if why:
+            merged_v, merged_f = _cut_cluster([parts[int(i)] for i in idx], w, refuse(c, why))
+            for i in idx:
+                shells[int(i)]["role"] = "merged"
+            actions.append(
+                f"cut shells {_fmt_shells(idx, shells)} ({how}, {why}) along their crossings "
+                f"into the boundary of the solid (signed volume "
+                f"{float(volumes[idx].sum()):.6g} -> {_signed_volume(merged_v, merged_f):.6g} m^3)"
+            )
+            if len(merged_f):
+                out.append((merged_v, merged_f))
+            continue
         solid = None
         if pos:
             solid = m3.Manifold.batch_boolean(
@@ -457,6 +470,33 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
     report["volume_after"] = _signed_volume(new_v, new_f)
     _warn_resolved(name, n_shells, report, warn)
     return new_v, new_f, report
+
+
+def _cut_cluster(parts, around: int, refusal: MeshError) -> tuple[np.ndarray, np.ndarray]:
+    """The boundary of the solid inside a group of crossing shells: their surfaces cut along
+    every crossing, and the patches between winding numbers 1 and 0, counting the
+    ``around`` of the shells that hold the group (`exactgrasp.geometry.arrangement`).
+    ``refusal`` is raised where the shells touch with uncertain signs (a coplanar contact
+    would need cutting too) or a crossing cannot be cut."""
+    offsets = np.cumsum([0] + [len(p[0]) for p in parts])
+    V = np.concatenate([p[0] for p in parts])
+    F = np.concatenate([p[1] + o for p, o in zip(parts, offsets, strict=False)])
+    _, label = split_shells(F, len(V))
+    t, u, code, _ = _crossings(V, F, label)
+    if (code == UNSURE).any():
+        raise refusal
+    try:
+        layers, _ = winding_layers(V, F, t, u)
+    except CutError:
+        raise refusal from None
+    # The solid's boundary there lies between the group's winding numbers 1 - around (behind)
+    # and -around; `winding_layers` numbers a layer k <= 0 as k - 1.
+    level = 1 - around
+    wanted = level if level >= 1 else level - 1
+    for k, Vk, Fk in layers:
+        if k == wanted:
+            return Vk, Fk
+    return np.empty((0, 3)), np.empty((0, 3), np.int64)
 
 
 def _signed_volume(V: np.ndarray, F: np.ndarray) -> float:

@@ -15,6 +15,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from exactgrasp.cache import DiskCache
 from exactgrasp.errors import MeshError, ModelError, warn_caller
 from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
@@ -59,6 +60,10 @@ GEOM_KIND.update({5: "cylinder", 6: "box", 7: "mesh", 8: "sdf"})
 JOINT_FREE, JOINT_BALL, JOINT_SLIDE, JOINT_HINGE = range(4)
 
 
+#: Welded, resolved link meshes on disk, keyed on the arrays MuJoCo read from the mesh file.
+WELDED = DiskCache("solids")
+
+
 def weld_mesh(
     V: np.ndarray,
     F: np.ndarray,
@@ -96,7 +101,42 @@ def weld_mesh(
     -------
     (numpy.ndarray (n', 3) float64, numpy.ndarray (m', 3) int64)
         The welded, outward-oriented closed mesh.
+
+    Notes
+    -----
+    The result, with what was repaired, resolved and warned, is kept in a disk cache
+    (`exactgrasp.cache.DiskCache`, ``EXACTGRASP_CACHE``) keyed on the arrays, ``what`` and
+    whether repairs are allowed: loading the same hand again, in any process, replays it.
     """
+    V = np.asarray(V)
+    F = np.asarray(F)
+    key = WELDED.key([V, F, what, str(repairs is not None), str(resolved is not None)])
+
+    def build():
+        notes: dict[str, list[str]] = {"repairs": [], "resolved": [], "warnings": []}
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            W, G = _weld(
+                V,
+                F,
+                what,
+                notes["repairs"] if repairs is not None else None,
+                notes["resolved"] if resolved is not None else None,
+            )
+        notes["warnings"] = [str(w.message) for w in caught]
+        return {"vertices": W, "faces": G}, notes
+
+    arrays, notes = WELDED.get(key, build)
+    if repairs is not None:
+        repairs.extend(notes["repairs"])
+    if resolved is not None:
+        resolved.extend(notes["resolved"])
+    for message in notes["warnings"]:
+        warn_caller(message)
+    return arrays["vertices"], arrays["faces"]
+
+
+def _weld(V, F, what, repairs, resolved):
     V, inverse = np.unique(np.asarray(V, dtype=np.float64), axis=0, return_inverse=True)
     F = inverse.reshape(-1)[np.asarray(F, dtype=np.int64)]
     eps = 2.0 * float(np.spacing(np.float32(np.abs(V).max() if len(V) else 1.0)))
