@@ -300,15 +300,21 @@ def _reversed_box(lo, hi):
         # Inside a 3 m box (winding number 1 around): an outward box (2 inside it) crossed by a
         # reversed one (0 where it is alone, 1 where both are): 27 - 0.24 + 0.12.
         (
-            [((0, 0, 0), (3, 3, 3), 1), ((1, 1, 1), (2, 2, 2), 1)]
-            + [((1.5, 1.2, 1.3), (2.5, 1.8, 1.7), -1)],
+            [
+                ((0, 0, 0), (3, 3, 3), 1),
+                ((1, 1, 1), (2, 2, 2), 1),
+                ((1.5, 1.2, 1.3), (2.5, 1.8, 1.7), -1),
+            ],
             26.88,
         ),
         # Two overlapping outward boxes and a reversed one crossing both: the union (1.28)
         # less the reversed box where exactly one outward box holds it (0.024 + 0.084 - 0.048).
         (
-            [((0, 0, 0), (1, 1, 1), 1), ((0.5, 0.1, 0.15), (1.5, 0.9, 0.85), 1)]
-            + [((0.8, 0.3, 0.35), (1.7, 0.7, 0.65), -1)],
+            [
+                ((0, 0, 0), (1, 1, 1), 1),
+                ((0.5, 0.1, 0.15), (1.5, 0.9, 0.85), 1),
+                ((0.8, 0.3, 0.35), (1.7, 0.7, 0.65), -1),
+            ],
             1.22,
         ),
     ],
