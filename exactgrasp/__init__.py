@@ -27,6 +27,7 @@ from exactgrasp.errors import (
     ModelError,
     NoiseError,
     SamplerError,
+    UncertainCrossingError,
 )
 from exactgrasp.geometry import objects
 from exactgrasp.geometry.solid import Solid
@@ -80,6 +81,7 @@ __all__ = [
     "PathSampler",
     "SamplerError",
     "Solid",
+    "UncertainCrossingError",
     "__version__",
     "available_backends",
     "close_fingers",

@@ -1,6 +1,6 @@
 """The keyed caches of exactgrasp: `LRUCache` in memory, `DiskCache` of arrays on disk.
 
-Imports nothing from exactgrasp but `exactgrasp.version`.
+Imports nothing from exactgrasp.
 """
 
 from __future__ import annotations
@@ -15,8 +15,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from exactgrasp.version import __version__
 
 
 class LRUCache:
@@ -74,22 +72,25 @@ class DiskCache:
 
     Each entry is one ``.npz`` file (no pickles), written to a temporary name and renamed, so
     processes that share the folder (batch workers) never read half an entry. Keys include
-    the package version: an upgrade starts afresh. An unreadable or unwritable cache is
-    skipped, never an error.
+    ``version``: a new version of the code that writes entries starts afresh. An unreadable
+    or unwritable cache is skipped, never an error.
 
     Parameters
     ----------
     kind : str
         Subfolder, and part of every key (``"solids"``).
+    version : str
+        Part of every key: the version of whatever computes the entries.
     """
 
-    def __init__(self, kind: str):
+    def __init__(self, kind: str, version: str):
         self.kind = kind
+        self.version = version
 
     def key(self, parts: Iterable[bytes | str | np.ndarray]) -> str:
         """SHA-256 (hex) of the version, the kind and each part (array bytes with dtype and
         shape)."""
-        digest = hashlib.sha256(f"{__version__}/{self.kind}".encode())
+        digest = hashlib.sha256(f"{self.version}/{self.kind}".encode())
         for part in parts:
             if isinstance(part, np.ndarray):
                 array = np.ascontiguousarray(part)

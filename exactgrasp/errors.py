@@ -28,6 +28,24 @@ class MeshError(ExactGraspError, ValueError):
     """A mesh is unusable as a solid (not closed, NaN coordinates, no faces, ...)."""
 
 
+class UncertainCrossingError(MeshError):
+    """A surface crosses or touches itself exactly at an edge or a corner, where floating-point
+    signs cannot tell how, so the crossing cannot be cut.
+
+    Attributes
+    ----------
+    why : str
+        What was found, in words.
+    point : numpy.ndarray, shape (3,)
+        A point near it, in the mesh's coordinates.
+    """
+
+    def __init__(self, why: str, point):
+        self.why = why
+        self.point = point
+        super().__init__(f"{why} near ({point[0]:.6g}, {point[1]:.6g}, {point[2]:.6g})")
+
+
 class GraspFileError(ExactGraspError, ValueError):
     """A grasp JSON file is malformed or names files that do not exist."""
 

@@ -69,8 +69,9 @@ def as_solid(
     Raises
     ------
     MeshError
-        For a form that is not accepted, or a mesh that is not a closed solid (open,
-        inconsistently oriented, self-crossing, flat, non-finite); the message names ``name``.
+        For a form that is not accepted, or a mesh that bounds no solid (open, inconsistently
+        oriented, crossing itself exactly at an edge or a corner, flat, non-finite); the
+        message names ``name``.
     """
     if isinstance(mesh, Solid):
         return mesh
@@ -167,11 +168,12 @@ def intersection_volume(
 ) -> Any:
     """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3.
 
-    Both meshes are read as `Solid`s (metres; overlapping shells merged, cavities kept, open
-    or self-crossing surfaces refused) and intersected with the exact backend's
-    `ExactIntersector`: every volume lies within its certified bound of the true volume, and
-    agrees with manifold3d's double-precision boolean to that bound plus the boolean's own
-    rounding (see ``docs/exact-backend.md``). Disjoint or touching meshes give exactly 0.
+    Both meshes are read as `Solid`s (metres; any closed surface read as the solid of winding
+    number >= 1 it bounds, with a warning when it had to be resolved; open surfaces refused)
+    and intersected with the exact backend's `ExactIntersector`: every volume lies within its
+    certified bound of the true volume, and agrees with manifold3d's double-precision boolean
+    to that bound plus the boolean's own rounding (see ``docs/exact-backend.md``). Disjoint or
+    touching meshes give exactly 0.
 
     Parameters
     ----------

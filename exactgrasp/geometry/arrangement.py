@@ -21,9 +21,10 @@ The layers keep every face's orientation, so together they have the shell's wind
 everywhere: layer 1 is the boundary of the solid; the others (a region the surface encloses
 twice, a part turned inside out) are left for `exactgrasp.geometry.shells`, which reads the
 shells of a mesh together. A crossing too close to a corner or an edge of the other triangle
-to be cut with certainty is reported as `CutError`.
+to be cut with certainty is reported as `exactgrasp.errors.UncertainCrossingError`.
 
-Imports numpy, scipy, manifold3d and `exactgrasp.geometry` (`topology`, `winding`).
+Imports numpy, scipy, manifold3d, `exactgrasp.errors` and `exactgrasp.geometry` (`topology`,
+`winding`).
 """
 
 from __future__ import annotations
@@ -34,23 +35,15 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from exactgrasp.errors import UncertainCrossingError
 from exactgrasp.geometry.topology import split_nonmanifold
 from exactgrasp.geometry.winding import winding_number
 
-__all__ = ["CutError", "winding_layers"]
+__all__ = ["winding_layers"]
 
 # Relative size of an orientation determinant below which its sign is not trusted (the
 # static bound of `exactgrasp.geometry.predicates`, for coordinates spanning the pair).
 _ORIENT_ERR = 1e-14
-
-
-class CutError(Exception):
-    """A crossing that cannot be cut with certainty; ``point`` is near it."""
-
-    def __init__(self, why: str, point: np.ndarray):
-        super().__init__(why)
-        self.why = why
-        self.point = np.asarray(point, dtype=np.float64)
 
 
 def _det(a, b, c, d) -> float:
@@ -89,8 +82,8 @@ class _Points:
 
 def _pierce(V, p, q, tri, bound):
     """Where segment V[p] V[q] passes through the interior of triangle ``tri``: its parameter
-    along the segment, None when it certainly does not, or `CutError` when uncertain. ``V``
-    holds the points as lists of floats."""
+    along the segment, None when it certainly does not; raises `UncertainCrossingError` when
+    uncertain. ``V`` holds the points as lists of floats."""
     a, b, c = V[tri[0]], V[tri[1]], V[tri[2]]
     P, Q = V[p], V[q]
     dp, dq = _det(a, b, c, P), _det(a, b, c, Q)
@@ -105,7 +98,7 @@ def _pierce(V, p, q, tri, bound):
     if max(s) > 0 and min(s) < 0:
         return None
     if sp == 0 or sq == 0 or 0 in s:
-        raise CutError(
+        raise UncertainCrossingError(
             "an edge passes through or touches a corner or edge",
             0.5 * (np.asarray(P) + np.asarray(Q)),
         )
@@ -145,7 +138,7 @@ def _segments(V, F, t, u, points):
             ends.append(next(iter(shared)))
         ends = list(dict.fromkeys(ends))
         if len(ends) != 2:
-            raise CutError(
+            raise UncertainCrossingError(
                 f"two triangles meet in {len(ends)} edge crossings, not a segment",
                 corners.mean(0),
             )
@@ -306,7 +299,7 @@ def _split_face(V, F, f, segs, on_edge, points) -> np.ndarray:
     if abs(float(np.sum(cross @ normal)) / total - total) > 1e-9 * total or np.any(
         cross @ normal < -1e-12 * total * total
     ):
-        raise CutError("a crossed triangle could not be tiled", (a + b + c) / 3.0)
+        raise UncertainCrossingError("a crossed triangle could not be tiled", (a + b + c) / 3.0)
     return tris
 
 
@@ -334,7 +327,7 @@ def winding_layers(
 
     Raises
     ------
-    CutError
+    UncertainCrossingError
         A crossing that cannot be cut with certainty.
     """
     V = np.asarray(vertices, dtype=np.float64)
@@ -385,7 +378,9 @@ def winding_layers(
                 level[p] = round(w)
                 break
         else:
-            raise CutError("a patch of the cut surface lies on another part of it", x)
+            raise UncertainCrossingError(
+                "a patch of the cut surface lies on another part of it", x
+            )
     layer_of_face = level[patch]
     layer_of_face = np.where(layer_of_face >= 1, layer_of_face, layer_of_face - 1)
     layers = []

@@ -34,11 +34,11 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from exactgrasp.errors import MeshError, warn_caller
-from exactgrasp.geometry.arrangement import CutError, winding_layers
 from exactgrasp.geometry.crossings import CROSS, UNSURE, find_crossings
 from exactgrasp.geometry.manifold import to_manifold
-from exactgrasp.geometry.topology import drop_repeated_faces, edge_defects, split_nonmanifold
-from exactgrasp.geometry.winding import winding_number, winding_range_columns
+from exactgrasp.geometry.topology import compact, split_shells
+from exactgrasp.geometry.untangle import cut_cluster, untangle
+from exactgrasp.geometry.winding import winding_number
 
 __all__ = ["find_crossings", "resolve_shells", "split_shells"]
 
@@ -55,155 +55,12 @@ _SELF_FIX = (
 # -- topology and crossings -------------------------------------------------------------------
 
 
-def split_shells(faces: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
-    """Shells of a closed mesh: faces connected through shared edges.
-
-    Parameters
-    ----------
-    faces : numpy.ndarray, shape (m, 3), int64
-    n_vertices : int
-
-    Returns
-    -------
-    n_shells : int
-    label : numpy.ndarray, shape (m,), int64
-        Shell of every face, numbered in order of their first face.
-    """
-    m = len(faces)
-    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), 1)
-    key = edges[:, 0] * np.int64(n_vertices) + edges[:, 1]
-    order = np.argsort(key, kind="stable")
-    face = np.tile(np.arange(m), 3)[order]
-    same = key[order][1:] == key[order][:-1]
-    graph = coo_matrix((np.ones(int(same.sum())), (face[:-1][same], face[1:][same])), (m, m))
-    n, label = connected_components(graph, directed=False)
-    # Renumber in order of first face, so that shell 0 holds face 0.
-    _, first = np.unique(label, return_index=True)
-    rank = np.empty(n, np.int64)
-    rank[np.argsort(first)] = np.arange(n)
-    return int(n), rank[label]
-
-
 # -- resolution -------------------------------------------------------------------------------
-
-
-def _at(x: np.ndarray) -> str:
-    return f"({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g})"
-
-
-def _crossings(V: np.ndarray, F: np.ndarray, label: np.ndarray):
-    """`find_crossings` with self-contacts, copies of one point counted as one vertex."""
-    _, identity = np.unique(V, axis=0, return_inverse=True)
-    return find_crossings(V, F, label, identity=identity.reshape(-1), self_contacts=True)
-
-
-def _check_self_contact(V, F, mine, t, u, name, s, n_shells) -> None:
-    """A shell whose triangles touch where floating-point signs cannot tell touching from
-    crossing: kept if its winding number stays 0 or 1 (-1 or 0 if reversed) along a grid of
-    vertical lines, refused otherwise (it then passes through itself exactly at an edge or a
-    corner, which is not cut here)."""
-    corners = V[F]
-    lo, hi = corners.reshape(-1, 3).min(0), corners.reshape(-1, 3).max(0)
-    spacing = float(max(hi[0] - lo[0], hi[1] - lo[1])) / 96.0 or 1.0
-    # Lines off the box's simple fractions, where modelled features (and the contacts, often
-    # in a coordinate plane) tend to sit.
-    origin = lo - np.array([0.381966, 0.618034, 0.0]) * spacing
-    shape = np.floor((hi[:2] - origin[:2]) / spacing).astype(np.int64) + 1
-    least, most = winding_range_columns((corners - origin) / spacing, int(shape[0]), int(shape[1]))
-    if most - least <= 1 and least in (-1, 0):
-        return
-    i = int(np.flatnonzero(mine)[0])
-    where = f"shell {s} of {n_shells}" if n_shells > 1 else "the surface"
-    raise MeshError(
-        f"{name}: {where} passes through itself (winding numbers from {least} to {most}) "
-        f"where its triangles meet exactly at an edge or a corner ({int(mine.sum())} triangle "
-        f"pairs, e.g. triangles {int(t[i])} and {int(u[i])} near {_at(V[F].mean((0, 1)))}), "
-        f"which floating-point signs cannot cut; {_SELF_FIX}, or perturb the mesh slightly."
-    )
-
-
-def _untangle(V: np.ndarray, F: np.ndarray, name: str):
-    """Repeated faces dropped, non-manifold edges untangled, self-crossing shells cut into
-    winding-number layers; with the shells and their crossings, and what was done."""
-    actions: list[str] = []
-    G, repeated, cancelled = drop_repeated_faces(F)
-    if repeated or cancelled:
-        actions.append(
-            f"dropped {repeated} repeated and {cancelled} mutually cancelling (reversed) faces"
-        )
-    defects = edge_defects(V, G)
-    if not defects.is_cycle:
-        raise MeshError(
-            f"{name}: not a closed surface ({defects.describe()}), so it bounds no solid; "
-            "close it first (repair=True)."
-        )
-    W = V
-    if defects.nonmanifold:
-        W, G, n_edges, n_split = split_nonmanifold(V, G)
-        actions.append(
-            f"separated the faces of {n_edges} edges shared by more than two faces (e.g. at "
-            f"{_at(defects.nonmanifold_at)}) into pairs bounding one solid wedge each, "
-            f"splitting {n_split} vertices"
-        )
-    n_shells, label = split_shells(G, len(W))
-    t, u, code, point = _crossings(W, G, label)
-    same = label[t] == label[u]
-    cross = same & (code == CROSS)
-    if cross.any():
-        kept = [G[~np.isin(label, label[t[cross]])]]
-        coords = [W]
-        offset = len(W)
-        for s in np.unique(label[t[cross]]):
-            mine = cross & (label[t] == s)
-            faces_s = np.flatnonzero(label == s)
-            local = np.full(len(G), -1)
-            local[faces_s] = np.arange(len(faces_s))
-            Vs, Fs = _compact(W, G[faces_s])
-            where = f"shell {s} of {n_shells}" if n_shells > 1 else "the surface"
-            x = point[np.flatnonzero(mine)[0]]
-            try:
-                layers, n_cut = winding_layers(Vs, Fs, local[t[mine]], local[u[mine]])
-            except CutError as exc:
-                raise MeshError(
-                    f"{name}: {where} ({len(Vs)} vertices, {len(Fs)} triangles) crosses itself "
-                    f"in {int(mine.sum())} triangle pairs (e.g. near {_at(x)}), and near "
-                    f"{_at(exc.point)} {exc.why}, so the crossing cannot be cut with "
-                    f"certainty; {_SELF_FIX}."
-                ) from exc
-            for _, Vk, Fk in layers:
-                coords.append(Vk)
-                kept.append(Fk + offset)
-                offset += len(Vk)
-            kinds = ", ".join(
-                f"w >= {k}" if k > 0 else f"w <= {k} (reversed)" for k, _, _ in layers
-            )
-            actions.append(
-                f"cut {where} ({len(Vs)} vertices, {len(Fs)} triangles), which crosses itself "
-                f"in {int(mine.sum())} triangle pairs (e.g. near {_at(x)}), along its crossings "
-                f"({n_cut} triangles split) into the boundaries of {kinds}"
-            )
-        W = np.concatenate(coords)
-        G = np.concatenate(kept)
-        W, G = _compact(W, G)
-        n_shells, label = split_shells(G, len(W))
-        t, u, code, point = _crossings(W, G, label)
-        same = label[t] == label[u]
-    touch = same & (code == UNSURE)
-    for s in np.unique(label[t[touch]]):
-        _check_self_contact(W, G[label == s], touch & (label[t] == s), t, u, name, s, n_shells)
-    if not actions:
-        return V, F, label, n_shells, t, u, code, actions
-    return W, G, label, n_shells, t, u, code, actions
 
 
 def _signed_volumes(V: np.ndarray, F: np.ndarray, label: np.ndarray, n: int) -> np.ndarray:
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     return np.bincount(label, np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0, minlength=n)
-
-
-def _compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    used, inverse = np.unique(F.reshape(-1), return_inverse=True)
-    return np.ascontiguousarray(V[used]), inverse.reshape(-1, 3).astype(np.int64)
 
 
 def _fmt_shells(indices, shells) -> str:
@@ -260,7 +117,7 @@ def resolve_shells(
     vertices_in, faces_in = vertices, faces
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
-    V, F, label, n_shells, t, u, code, untangled = _untangle(V, F, name)
+    V, F, label, n_shells, t, u, code, untangled = untangle(V, F, name)
     if untangled:
         vertices, faces = V, F
     volumes = _signed_volumes(V, F, label, n_shells)
@@ -294,7 +151,7 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
 
     order = np.argsort(label, kind="stable")
     starts = np.searchsorted(label[order], np.arange(n_shells + 1))
-    parts = [_compact(V, F[order[starts[i] : starts[i + 1]]]) for i in range(n_shells)]
+    parts = [compact(V, F[order[starts[i] : starts[i + 1]]]) for i in range(n_shells)]
     shells = [
         {"index": i, "vertices": len(p[0]), "faces": len(p[1]), "volume": float(volumes[i]),
          "role": ""}
@@ -413,7 +270,7 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
         elif (pos and w < 0) or (neg and w >= 2):
             why = f"cross each other where the winding number around them is {w}"
         if why:
-            merged_v, merged_f = _cut_cluster([parts[int(i)] for i in idx], w, refuse(c, why))
+            merged_v, merged_f = cut_cluster([parts[int(i)] for i in idx], w, refuse(c, why))
             for i in idx:
                 shells[int(i)]["role"] = "merged"
             actions.append(
@@ -470,33 +327,6 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
     report["volume_after"] = _signed_volume(new_v, new_f)
     _warn_resolved(name, n_shells, report, warn)
     return new_v, new_f, report
-
-
-def _cut_cluster(parts, around: int, refusal: MeshError) -> tuple[np.ndarray, np.ndarray]:
-    """The boundary of the solid inside a group of crossing shells: their surfaces cut along
-    every crossing, and the patches between winding numbers 1 and 0, counting the
-    ``around`` of the shells that hold the group (`exactgrasp.geometry.arrangement`).
-    ``refusal`` is raised where the shells touch with uncertain signs (a coplanar contact
-    would need cutting too) or a crossing cannot be cut."""
-    offsets = np.cumsum([0] + [len(p[0]) for p in parts])
-    V = np.concatenate([p[0] for p in parts])
-    F = np.concatenate([p[1] + o for p, o in zip(parts, offsets, strict=False)])
-    _, label = split_shells(F, len(V))
-    t, u, code, _ = _crossings(V, F, label)
-    if (code == UNSURE).any():
-        raise refusal
-    try:
-        layers, _ = winding_layers(V, F, t, u)
-    except CutError:
-        raise refusal from None
-    # The solid's boundary there lies between the group's winding numbers 1 - around (behind)
-    # and -around; `winding_layers` numbers a layer k <= 0 as k - 1.
-    level = 1 - around
-    wanted = level if level >= 1 else level - 1
-    for k, Vk, Fk in layers:
-        if k == wanted:
-            return Vk, Fk
-    return np.empty((0, 3)), np.empty((0, 3), np.int64)
 
 
 def _signed_volume(V: np.ndarray, F: np.ndarray) -> float:

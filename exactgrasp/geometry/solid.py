@@ -60,8 +60,10 @@ class Solid:
     name : str, optional
         Shown in messages (a file path for `from_file`).
     repair : bool
-        Fix what trimesh and pymeshfix can (merge vertices, fix winding, fill holes) and warn
-        with the volume before and after. A mesh still not closed afterwards is refused.
+        For open or inconsistently oriented surfaces: fix what trimesh and pymeshfix can
+        (merge vertices, fix winding, fill holes) and warn with the volume before and after.
+        A mesh still not closed afterwards is refused. A closed surface is never repaired:
+        it is resolved into the solid it bounds whatever this option.
     orientation : {"flip", "refuse"}
         What to do with an inside-out mesh (negative volume), or with an inside-out shell
         that lies inside no other shell: flip it with a warning, or refuse it.
@@ -114,9 +116,9 @@ class Solid:
         mesh.merge_vertices(merge_tex=True, merge_norm=True, digits_vertex=None)
         self.repair_report: dict[str, Any] | None = None
         defects = edge_defects(mesh.vertices, drop_repeated_faces(mesh.faces)[0])
-        # A closed surface with edges of four faces bounds a solid as it is: repair is for
-        # open or inconsistently oriented surfaces only.
-        if repair and not (defects.is_cycle and defects.nonmanifold):
+        # A closed surface bounds a solid as it is, however messy: repair is for open or
+        # inconsistently oriented surfaces only.
+        if repair and not defects.is_cycle:
             mesh = self._repair(mesh)
             defects = edge_defects(mesh.vertices, drop_repeated_faces(mesh.faces)[0])
         self._check_closed(defects)

@@ -9,6 +9,7 @@ edges shared by four or more faces (two parts of a link touching along an edge),
   (holes) and edges used twice in one direction (neighbours that disagree on the outside);
 * drops faces that bound nothing: a face repeated with the same orientation is kept once, a
   face and its reverse cancel (`drop_repeated_faces`);
+* splits a mesh into shells (`split_shells`) and drops unused vertices (`compact`);
 * turns a cycle into an oriented 2-manifold without moving a vertex (`split_nonmanifold`):
   around an edge of more than two faces, each face is paired with the neighbour that bounds
   the same solid wedge, and a vertex whose faces then form several fans becomes one vertex
@@ -25,7 +26,14 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-__all__ = ["EdgeDefects", "drop_repeated_faces", "edge_defects", "split_nonmanifold"]
+__all__ = [
+    "EdgeDefects",
+    "compact",
+    "drop_repeated_faces",
+    "edge_defects",
+    "split_nonmanifold",
+    "split_shells",
+]
 
 
 @dataclass(frozen=True)
@@ -271,3 +279,38 @@ def split_nonmanifold(
     counts = np.bincount(vertex_of_fan, minlength=len(V))
     split_vertices = int((counts > 1).sum())
     return np.ascontiguousarray(V[vertex_of_fan]), new_faces, len(crowded), split_vertices
+
+
+def split_shells(faces: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
+    """Shells of a closed mesh: faces connected through shared edges.
+
+    Parameters
+    ----------
+    faces : numpy.ndarray, shape (m, 3), int64
+    n_vertices : int
+
+    Returns
+    -------
+    n_shells : int
+    label : numpy.ndarray, shape (m,), int64
+        Shell of every face, numbered in order of their first face.
+    """
+    m = len(faces)
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), 1)
+    key = edges[:, 0] * np.int64(n_vertices) + edges[:, 1]
+    order = np.argsort(key, kind="stable")
+    face = np.tile(np.arange(m), 3)[order]
+    same = key[order][1:] == key[order][:-1]
+    graph = coo_matrix((np.ones(int(same.sum())), (face[:-1][same], face[1:][same])), (m, m))
+    n, label = connected_components(graph, directed=False)
+    # Renumber in order of first face, so that shell 0 holds face 0.
+    _, first = np.unique(label, return_index=True)
+    rank = np.empty(n, np.int64)
+    rank[np.argsort(first)] = np.arange(n)
+    return int(n), rank[label]
+
+
+def compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Only the vertices the faces use, renumbered in order."""
+    used, inverse = np.unique(F.reshape(-1), return_inverse=True)
+    return np.ascontiguousarray(V[used]), inverse.reshape(-1, 3).astype(np.int64)

@@ -21,6 +21,7 @@ from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.geometry.topology import drop_repeated_faces, edge_defects
+from exactgrasp.version import __version__
 
 __all__ = [
     "GEOM_BOX",
@@ -61,7 +62,7 @@ JOINT_FREE, JOINT_BALL, JOINT_SLIDE, JOINT_HINGE = range(4)
 
 
 #: Welded, resolved link meshes on disk, keyed on the arrays MuJoCo read from the mesh file.
-WELDED = DiskCache("solids")
+WELDED = DiskCache("solids", version=__version__)
 
 
 def weld_mesh(
