@@ -117,7 +117,7 @@ def resolve_shells(
     vertices_in, faces_in = vertices, faces
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
-    V, F, label, n_shells, t, u, code, untangled = untangle(V, F, name)
+    V, F, label, n_shells, t, u, code, untangled, final = untangle(V, F, name)
     if untangled:
         vertices, faces = V, F
     volumes = _signed_volumes(V, F, label, n_shells)
@@ -134,10 +134,12 @@ def resolve_shells(
     }
     if untangled:
         report["volume_before"] = _signed_volume(vertices_in, faces_in)
-    if n_shells == 1:
+    if n_shells == 1 or final:
         report["shells"] = [
-            {"index": 0, "vertices": len(np.unique(F)), "faces": len(F), "volume": total,
-             "role": "outer"}
+            {"index": i, "vertices": len(np.unique(F[label == i])),
+             "faces": int((label == i).sum()), "volume": float(volumes[i]),
+             "role": "resolved" if final else "outer"}
+            for i in range(n_shells)
         ]  # fmt: skip
         if untangled:
             report["volume_after"] = total

@@ -12,6 +12,8 @@ along a grid of lines (`check_self_contact`).
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from exactgrasp.errors import MeshError, UncertainCrossingError
 from exactgrasp.geometry.arrangement import winding_layers
@@ -23,7 +25,7 @@ from exactgrasp.geometry.topology import (
     split_nonmanifold,
     split_shells,
 )
-from exactgrasp.geometry.winding import winding_range_columns
+from exactgrasp.geometry.winding import winding_number, winding_range_columns
 
 __all__ = ["SELF_FIX", "crossing_pairs", "cut_cluster", "format_point", "untangle"]
 
@@ -70,8 +72,9 @@ def check_self_contact(V, F, mine, t, u, contact, name, s, n_shells) -> None:
 
 
 def untangle(V: np.ndarray, F: np.ndarray, name: str):
-    """Repeated faces dropped, non-manifold edges untangled, self-crossing shells cut into
-    winding-number layers; with the shells and their crossings, and what was done."""
+    """Repeated faces dropped, non-manifold edges untangled, self-crossing shells cut; with
+    the shells and their crossings, what was done, and whether the result is final (every
+    shell was cut with the group it crosses: the mesh is the solid's boundary as it is)."""
     actions: list[str] = []
     G, repeated, cancelled = drop_repeated_faces(F)
     if repeated or cancelled:
@@ -96,11 +99,36 @@ def untangle(V: np.ndarray, F: np.ndarray, name: str):
     t, u, code, point = crossing_pairs(W, G, label)
     same = label[t] == label[u]
     cross = same & (code == CROSS)
+    final = False
     if cross.any():
-        kept = [G[~np.isin(label, label[t[cross]])]]
-        coords = [W]
-        offset = len(W)
+        # Shells linked to a self-crossing one by certain crossings are cut with it, as one
+        # group, unless some of them touch where signs are uncertain (a touching contact is
+        # not cut, so patches there could not be told apart): then each self-crossing shell
+        # is cut alone into its layers, and the shells are related afterwards.
+        certain = code == CROSS
+        links = coo_matrix(
+            (np.ones(int(certain.sum())), (label[t[certain]], label[u[certain]])),
+            (n_shells, n_shells),
+        )
+        _, group = connected_components(links, directed=False)
+        unsure = np.zeros(n_shells, bool)
+        unsure[label[t[code == UNSURE]]] = True
+        unsure[label[u[code == UNSURE]]] = True
+        replaced = np.zeros(n_shells, bool)
+        layered = False
+        pieces: list[tuple[np.ndarray, np.ndarray]] = []
         for s in np.unique(label[t[cross]]):
+            if replaced[s]:
+                continue
+            members = np.flatnonzero(group == group[s])
+            if not unsure[members].any():
+                replaced[members] = True
+                Vc, Fc, action = _cut_group(W, G, label, members, name, n_shells)
+                pieces.append((Vc, Fc))
+                actions.append(action)
+                continue
+            replaced[s] = True
+            layered = True
             mine = cross & (label[t] == s)
             faces_s = np.flatnonzero(label == s)
             local = np.full(len(G), -1)
@@ -117,10 +145,7 @@ def untangle(V: np.ndarray, F: np.ndarray, name: str):
                     f"{format_point(exc.point)} {exc.why}, so the crossing cannot be cut with "
                     f"certainty; {SELF_FIX}."
                 ) from exc
-            for _, Vk, Fk in layers:
-                coords.append(Vk)
-                kept.append(Fk + offset)
-                offset += len(Vk)
+            pieces += [(Vk, Fk) for _, Vk, Fk in layers]
             kinds = ", ".join(
                 f"w >= {k}" if k > 0 else f"w <= {k} (reversed)" for k, _, _ in layers
             )
@@ -129,6 +154,16 @@ def untangle(V: np.ndarray, F: np.ndarray, name: str):
                 f"in {int(mine.sum())} triangle pairs (e.g. near {format_point(x)}), along its "
                 f"crossings ({n_cut} triangles split) into the boundaries of {kinds}"
             )
+        # Cut groups are the solid's boundary already: with nothing else left, the shells need
+        # relating no more.
+        final = bool(replaced.all()) and not layered
+        coords = [W]
+        kept = [G[~replaced[label]]]
+        offset = len(W)
+        for Vk, Fk in pieces:
+            coords.append(Vk)
+            kept.append(Fk + offset)
+            offset += len(Vk)
         W = np.concatenate(coords)
         G = np.concatenate(kept)
         W, G = compact(W, G)
@@ -141,8 +176,54 @@ def untangle(V: np.ndarray, F: np.ndarray, name: str):
         contact = W[G[t[np.flatnonzero(mine)[0]]]].mean(0)
         check_self_contact(W, G[label == s], mine, t, u, contact, name, s, n_shells)
     if not actions:
-        return V, F, label, n_shells, t, u, code, actions
-    return W, G, label, n_shells, t, u, code, actions
+        return V, F, label, n_shells, t, u, code, actions, False
+    return W, G, label, n_shells, t, u, code, actions, final
+
+
+def _cut_group(W, G, label, members, name, n_shells):
+    """Cut a group of shells (one of them crossing itself) along all their crossings and keep
+    the boundary of the solid: the patches between winding numbers 1 and 0, counting the
+    shells around the group. A group whose solid is then empty while it wraps space
+    negatively (an inside-out body) gives the boundary of that region, turned outward."""
+    inside = np.isin(label, members)
+    Vc, Fc = compact(W, G[inside])
+    rest = G[~inside]
+    around = round(float(winding_number(Vc[0], W, rest))) if len(rest) else 0
+    what = ", ".join(str(int(m)) for m in members)
+    where = (
+        f"shells {what} of {n_shells}"
+        if len(members) > 1
+        else (f"shell {what} of {n_shells}" if n_shells > 1 else "the surface")
+    )
+    _, local_label = split_shells(Fc, len(Vc))
+    t, u, code, point = crossing_pairs(Vc, Fc, local_label)
+    try:
+        layers, n_cut = winding_layers(Vc, Fc, t[code == CROSS], u[code == CROSS])
+    except UncertainCrossingError as exc:
+        raise MeshError(
+            f"{name}: {where} ({len(Vc)} vertices, {len(Fc)} triangles) cross in "
+            f"{int((code == CROSS).sum())} triangle pairs (e.g. near {format_point(point[0])}), "
+            f"and near {format_point(exc.point)} {exc.why}, so the crossing cannot be cut "
+            f"with certainty; {SELF_FIX}."
+        ) from exc
+    by_level = {k: (Vk, Fk) for k, Vk, Fk in layers}
+    level = 1 - around
+    Vk, Fk = by_level.get(level if level >= 1 else level - 1, (np.empty((0, 3)), None))
+    flipped = ""
+    if Fk is None and around == 0 and -1 in by_level and 1 not in by_level:
+        Vk, Fk = by_level[-1]
+        Fk = Fk[:, ::-1].copy()
+        flipped = ", turned outward (the group is inside out)"
+    if Fk is None:
+        Vk, Fk = np.empty((0, 3)), np.empty((0, 3), np.int64)
+    crossing = "crosses itself" if len(members) == 1 else "cross themselves and each other"
+    action = (
+        f"cut {where} ({len(Vc)} vertices, {len(Fc)} triangles), which {crossing} in "
+        f"{int((code == CROSS).sum())} triangle pairs (e.g. near {format_point(point[0])}), "
+        f"along the crossings ({n_cut} triangles split) into the boundary of the points of "
+        f"winding number >= 1{flipped}"
+    )
+    return Vk, Fk, action
 
 
 def cut_cluster(parts, around: int, refusal: MeshError) -> tuple[np.ndarray, np.ndarray]:
