@@ -18,7 +18,7 @@ import trimesh
 
 from exactgrasp.backends.base import check_poses
 from exactgrasp.backends.exact import ExactIntersector
-from exactgrasp.errors import BackendError, MeshError
+from exactgrasp.errors import BackendError, Fix, MeshError
 from exactgrasp.geometry.intake import UNITS, unit_scale
 from exactgrasp.geometry.solid import Solid
 
@@ -87,7 +87,7 @@ def as_solid(
         try:
             return Solid.from_file(mesh, **options)
         except MeshError as exc:
-            raise MeshError(f"{name}: {exc}") from exc
+            raise exc.prefixed(f"{name}: ") from exc
     if isinstance(mesh, tuple | list) and len(mesh) == 2:
         vertices, faces = _arrays(mesh, name)
         return Solid(vertices, faces, name=name, **options)
@@ -117,8 +117,9 @@ def _units_pair(units: Any) -> tuple[str, str]:
         or not all(isinstance(u, str) and u in UNITS for u in pair)
     ):
         raise MeshError(
-            f"units={units!r}; use one of {UNIT_NAMES} for both meshes, or a pair "
-            "(units of a, units of b) such as ('m', 'mm')."
+            Fix("units", units),
+            f"; use one of {UNIT_NAMES} for both meshes, or a pair "
+            "(units of a, units of b) such as ('m', 'mm').",
         )
     return pair[0], pair[1]
 

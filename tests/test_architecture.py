@@ -259,3 +259,75 @@ def test_project_speaks_of_itself(path):
         for m in WORDS.finditer(text)
     ]
     assert not hits, "words about how the project is run, not what it is: " + "; ".join(hits)
+
+
+# -- errors are data ------------------------------------------------------------------------
+
+#: The one adapter that reads a third-party library's message: MuJoCo says which mesh file it
+#: could not open only in its text.
+MESSAGE_ADAPTERS = {"exactgrasp.hands.loading"}
+
+
+def _caught_text(node: ast.AST, caught: set[str]) -> bool:
+    """``str(exc)`` or ``exc.args`` of an exception bound by an enclosing ``except``."""
+    if isinstance(node, ast.Call) and ast.unparse(node.func) == "str" and len(node.args) == 1:
+        return isinstance(node.args[0], ast.Name) and node.args[0].id in caught
+    return (
+        isinstance(node, ast.Attribute)
+        and node.attr == "args"
+        and isinstance(node.value, ast.Name)
+        and node.value.id in caught
+    )
+
+
+def message_readers(tree: ast.AST) -> list[str]:
+    """Places that read a caught exception's text rather than pass it on whole: a method called
+    on it (``str(exc).replace``), an index into it, a comparison, or a call that takes it (other
+    than printing, warning or logging it)."""
+    parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
+    found = []
+    for handler in (n for n in ast.walk(tree) if isinstance(n, ast.ExceptHandler)):
+        if not handler.name:
+            continue
+        for node in ast.walk(handler):
+            if not _caught_text(node, {handler.name}):
+                continue
+            parent = parents[node]
+            whole = isinstance(parent, ast.FormattedValue | ast.Return | ast.keyword | ast.Dict)
+            if isinstance(parent, ast.Call) and node in parent.args:
+                whole = ast.unparse(parent.func).split(".")[-1] in {"print", "warn", "log"}
+            if isinstance(parent, ast.BoolOp):  # str(exc) or repr(exc): still whole
+                whole = isinstance(parents[parent], ast.keyword | ast.Dict | ast.Return)
+            if not whole:
+                found.append(f"line {node.lineno}: {ast.unparse(parent)[:80]}")
+    return found
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_no_exception_text_is_parsed(module):
+    """Errors carry their fields (`exactgrasp.errors.Fix`); front ends spell those, never an
+    exception's text. Only the adapter of a library that says something in its text alone may
+    read it."""
+    found = message_readers(ast.parse(MODULES[module].read_text()))
+    if module in MESSAGE_ADAPTERS:
+        assert found, f"{module} no longer reads a message: take it off MESSAGE_ADAPTERS"
+    else:
+        assert not found, f"{module} reads an exception's text: {found}"
+
+
+def test_the_message_rule_catches_rewriting():
+    bad = [
+        "try:\n    f()\nexcept E as exc:\n    raise E(str(exc).replace('a', 'b'))",
+        "try:\n    f()\nexcept E as exc:\n    m = re.sub('a', 'b', str(exc))",
+        "try:\n    f()\nexcept E as exc:\n    if str(exc).startswith('x'):\n        pass",
+        "try:\n    f()\nexcept KeyError as exc:\n    k = exc.args[0]",
+        "try:\n    f()\nexcept E as exc:\n    m = translate(str(exc), TABLE)",
+    ]
+    good = [
+        "try:\n    f()\nexcept E as exc:\n    raise E(f'bad JSON ({exc})') from exc",
+        "try:\n    f()\nexcept E as exc:\n    r.update(message=str(exc) or repr(exc))",
+        "try:\n    f()\nexcept E as exc:\n    return {'reason': str(exc)}",
+        "try:\n    f()\nexcept E as exc:\n    raise exc.prefixed('A: ') from exc",
+    ]
+    assert all(message_readers(ast.parse(code)) for code in bad)
+    assert not any(message_readers(ast.parse(code)) for code in good)

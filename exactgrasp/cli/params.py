@@ -23,7 +23,6 @@ from exactgrasp.backends import registry
 from exactgrasp.backends.base import Backend
 from exactgrasp.backends.defaults import COMPARED_BACKENDS
 from exactgrasp.backends.params import Param, describe
-from exactgrasp.cli.common import renamed
 from exactgrasp.errors import BackendError, ExactGraspError
 
 __all__ = [
@@ -82,7 +81,7 @@ def _declared(name: str, flag: str) -> dict[str, tuple[Param, Any]] | None:
         try:
             registry.get_backend(name)  # says why: an unknown name or a missing package
         except ExactGraspError as exc:
-            raise renamed(exc, f"{flag} {name}: {exc}") from exc
+            raise exc.prefixed(f"{flag} {name}: ") from exc
     try:
         return declared_parameters(registry.backend_class(name))
     except ExactGraspError:
@@ -237,4 +236,4 @@ def build_backend(name: str, params: Mapping[str, Any]) -> Backend:
     try:
         return registry.get_backend(name, **params)
     except BackendError as exc:
-        raise BackendError(f"--param: {exc}") from exc
+        raise exc.prefixed("--param: ") from exc

@@ -18,7 +18,7 @@ import hashlib
 import numpy as np
 
 from exactgrasp.cache import LRUCache
-from exactgrasp.errors import ClosingError
+from exactgrasp.errors import ClosingError, Fix
 from exactgrasp.geometry.bvh import build_bvh, distance, require_engine
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.geometry.winding import winding_number
@@ -188,8 +188,9 @@ def backoff(
     if not allowed:
         raise ClosingError(
             f"the open hand penetrates {scene.obj.name} by {high * 1e3:.3f} mm along the palm "
-            f"normal (links {', '.join(stuck)}); pass backoff=True to move the object out by "
-            "that much, or move it yourself"
+            f"normal (links {', '.join(stuck)}); ",
+            Fix("backoff", True, "pass"),
+            " to move the object out by that much, or move it yourself",
         )
     clear(high)
     return high

@@ -22,10 +22,17 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import GraspFileError
+from exactgrasp.errors import Fix, GraspFileError
 from exactgrasp.geometry.se3 import rigid_defect
 from exactgrasp.geometry.solid import Solid
-from exactgrasp.grasp.files import read_hand, read_object, write_hand, write_object
+from exactgrasp.grasp.files import (
+    OBJECT_KEYS,
+    file_terms,
+    read_hand,
+    read_object,
+    write_hand,
+    write_object,
+)
 from exactgrasp.grasp.schema import check_grasp_data
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.hand import Hand
@@ -39,9 +46,7 @@ FORMAT = "exactgrasp.grasp/1"
 POSE_ATOL = 1e-5
 
 
-def check_pose(
-    pose: Any, name: str = "object_pose", units: str = "Solid(..., units=...)"
-) -> np.ndarray:
+def check_pose(pose: Any, name: str = "object_pose") -> np.ndarray:
     """Validate a rigid 4x4 transform.
 
     Parameters
@@ -49,9 +54,6 @@ def check_pose(
     pose : array_like, shape (4, 4)
     name : str
         Used in the message.
-    units : str
-        Where the caller sets the object's length unit, for the message (a scale belongs
-        there, not in the pose).
 
     Returns
     -------
@@ -67,8 +69,10 @@ def check_pose(
         raise GraspFileError(
             f"{name} is not a rigid transform: {what}. Give a rotation (orthonormal, "
             f"determinant +1, to {POSE_ATOL:g}) and a translation in metres, last row 0 0 0 1; "
-            f"a mesh in other units takes {units}, not a scale in the pose, and a mirrored "
-            "object a mirrored mesh."
+            "a mesh in other units takes ",
+            # Where the object's length unit is set: a scale belongs there, not in the pose.
+            Fix("units", form="where", python="Solid(..., units=...)"),
+            ", not a scale in the pose, and a mirrored object a mirrored mesh.",
         )
     return arr
 
@@ -223,11 +227,10 @@ class Grasp:
         check_grasp_data(data, source)
         obj = read_object(data, base_dir, source, overrides)
         hand = read_hand(data, base_dir, source, overrides)
-        pose = check_pose(
-            data["object_pose_in_hand"],
-            f"{source}: object_pose_in_hand",
-            units='"object_units" in the grasp file',
-        )
+        try:
+            pose = check_pose(data["object_pose_in_hand"], f"{source}: object_pose_in_hand")
+        except GraspFileError as exc:
+            raise exc.respelled(file_terms, keys=OBJECT_KEYS) from exc
         return cls(hand, obj, pose, name=data.get("name", Path(source).stem))
 
     def to_dict(self, base_dir: str | os.PathLike = ".", sidecar_stem: str = "grasp") -> dict:

@@ -115,14 +115,14 @@ class HandFrame:
         """Inverse of `to_dict`; also reads the shared data's ``palm_frame.json`` schema."""
         if data.get("identity"):
             return cls.identity()
-        try:
-            return cls.from_palm(
-                data["origin"], data["normal"], data["up"], data["depth"], data.get("scale")
-            )
-        except KeyError as exc:
+        missing = [key for key in ("origin", "normal", "up", "depth") if key not in data]
+        if missing:
             raise FrameError(
-                f"a palm frame needs origin, normal, up and depth; {exc.args[0]!r} is missing."
-            ) from None
+                f"a palm frame needs origin, normal, up and depth; {missing[0]!r} is missing."
+            )
+        return cls.from_palm(
+            data["origin"], data["normal"], data["up"], data["depth"], data.get("scale")
+        )
 
     def to_dict(self) -> dict:
         """JSON-serialisable form."""

@@ -15,7 +15,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from exactgrasp.errors import MeshError, ModelError, warn_caller
+from exactgrasp.errors import Fix, MeshError, ModelError, warn_caller
 from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
 from exactgrasp.geometry.solid import Solid
@@ -110,16 +110,17 @@ def weld_mesh(
         n_open = int(np.count_nonzero(~np.isin(reverse, key)))
         raise ModelError(
             f"{what} is not a closed, consistently oriented surface even after merging "
-            f"duplicate vertices ({n_open} edges without an opposite); pass repair=True "
-            "(to load_model, Hand.from_mjcf or Hand.from_urdf) to close it as "
-            "Solid(repair=True) does, repair the mesh file, or use a primitive geom instead"
+            f"duplicate vertices ({n_open} edges without an opposite); ",
+            Fix("repair", True, "pass"),
+            " (to load_model, Hand.from_mjcf or Hand.from_urdf) to close it as "
+            "Solid(repair=True) does, repair the mesh file, or use a primitive geom instead",
         )
     try:
         # Once per mesh asset, at compile time: posing moves links rigidly, so a resolved
         # link stays resolved in every joint configuration.
         V, F, _ = resolve_shells(V, F, what, orientation="flip", warn=warn_caller)
     except MeshError as exc:
-        raise ModelError(str(exc)) from None
+        raise ModelError(*exc.parts) from exc
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     if np.einsum("ij,ij->", a, np.cross(b, c)) < 0:
         warn_caller(f"{what} is inside-out (negative volume); its faces were flipped")
@@ -153,7 +154,7 @@ def repair_mesh(
         try:
             solid = Solid(V, F, name=what, repair=True, check_scale=False)
         except MeshError as exc:
-            raise ModelError(f"{exc} (with repair=True)") from None
+            raise ModelError(*exc.parts, " (with ", Fix("repair", True), ")") from exc
     for w in caught:  # the repair itself is reported once, below; shell notes pass on
         if not str(w.message).startswith(f"{what}: repaired"):
             warn_caller(str(w.message))
@@ -259,17 +260,24 @@ def collect_geoms(
         warn_caller(f"{source}: geoms left out of the hand: " + "; ".join(notes))
     if not kept:
         if other:
-            hint = f"; {other} geom(s) of the other kind exist: try geometry='all'"
+            hint: tuple = (
+                f"; {other} geom(s) of the other kind exist: try ",
+                Fix("geometry", "all"),
+            )
         elif root or outside:
-            hint = "; pass root_body= naming the body whose subtree holds the hand's geoms"
+            hint = (
+                "; ",
+                Fix("root_body", form="pass", shown=""),
+                " naming the body whose subtree holds the hand's geoms",
+            )
         else:
             hint = (
                 "; the model has no solid geom (box, sphere, capsule, cylinder, ellipsoid or "
-                "mesh): add the hand's geoms to the model file"
+                "mesh): add the hand's geoms to the model file",
             )
         raise ModelError(
-            f"{source}: no {geometry} geometry in the hand's subtree "
-            f"(root {body_names[root]!r}){hint}"
+            f"{source}: no {geometry} geometry in the hand's subtree (root {body_names[root]!r})",
+            *hint,
         )
     per_body: dict[int, list[int]] = {}
     for g in kept:

@@ -21,7 +21,7 @@ from typing import Any, Protocol
 import numpy as np
 import trimesh
 
-from exactgrasp.errors import FrameError, JointError, MeshError
+from exactgrasp.errors import Fix, FrameError, JointError, MeshError
 from exactgrasp.geometry.manifold import union_volume
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.hands.frame import HandFrame
@@ -111,8 +111,14 @@ class Hand:
             palm = getattr(model, "palm", None)
             if palm is None:
                 raise FrameError(
-                    f"{model.name} names no palm frame; pass frame=HandFrame.from_palm(origin, "
-                    "normal, up, depth) (the paper's frame) or frame=HandFrame.identity()."
+                    f"{model.name} names no palm frame; ",
+                    Fix(
+                        "frame",
+                        form="pass",
+                        python="pass frame=HandFrame.from_palm(origin, normal, up, depth) "
+                        "(the paper's frame) or frame=HandFrame.identity()",
+                    ),
+                    ".",
                 )
             frame = _frame_from_palm(palm)
         if not isinstance(frame, HandFrame):

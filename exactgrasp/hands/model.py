@@ -18,7 +18,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from exactgrasp.errors import JointError, ModelError, warn_caller
+from exactgrasp.errors import Fix, JointError, ModelError, warn_caller
 from exactgrasp.hands.geoms import JOINT_SLIDE, collect_geoms
 from exactgrasp.hands.joints import collect_joints
 from exactgrasp.hands.palm import PalmSpec
@@ -127,7 +127,9 @@ class KinematicModel:
             if on_limit == "error":
                 raise JointError(
                     f"joint {n!r} = {v!r} is outside its limits [{lo}, {hi}] "
-                    f"(tolerance {slack:g}); pass on_limit='clip' to clip it"
+                    f"(tolerance {slack:g}); ",
+                    Fix("on_limit", "clip", "pass"),
+                    " to clip it",
                 )
             out[n] = min(max(v, lo), hi)
             clipped.append(f"{n}: {v!r} -> {out[n]!r}")

@@ -18,7 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from exactgrasp.errors import ModelError, warn_caller
+from exactgrasp.errors import Fix, ModelError, warn_caller
 from exactgrasp.hands.geoms import (
     GEOM_HFIELD,
     GEOM_KIND,
@@ -139,10 +139,11 @@ def hand_subtree(
         if len(found) > 1:
             raise ModelError(
                 f"{source}: {len(found)} top-level bodies carry {geometry} geometry, so the "
-                "model is a scene and which of them is the hand is not known; pass "
-                "root_body= the hand's root body. Candidates, the most hand-like first: "
+                "model is a scene and which of them is the hand is not known; ",
+                Fix("root_body", form="pass", shown=""),
+                " the hand's root body. Candidates, the most hand-like first: "
                 + "; ".join(c.describe() for c in found)
-                + ". (Run `exactgrasp inspect` on the model to see its body tree.)"
+                + ". (Run `exactgrasp inspect` on the model to see its body tree.)",
             )
         root = 0
     elif root_body in names:

@@ -33,11 +33,12 @@ from exactgrasp.backends.exact.tolerances import (
     U_EXTENDED,
     U,
 )
-from exactgrasp.errors import MeshError
+from exactgrasp.errors import Fix, MeshError
 
 _REPAIR_HINT = (
-    "the exact backend needs closed, consistently oriented surfaces; load the mesh with "
-    "repair=True (or fix it in a mesh editor) and try again."
+    "the exact backend needs closed, consistently oriented surfaces; load the mesh with ",
+    Fix("repair", True),
+    " (or fix it in a mesh editor) and try again.",
 )
 
 
@@ -55,7 +56,7 @@ def prepare_mesh(V: np.ndarray, F: np.ndarray) -> MeshTables:
     uniq, inv, counts = np.unique(key, return_inverse=True, return_counts=True)
     forward = src < dst
     if np.any(counts != 2) or np.bincount(inv, weights=forward, minlength=len(uniq)).min() != 1:
-        raise MeshError(f"mesh is not a closed, oriented 2-manifold after merging; {_REPAIR_HINT}")
+        raise MeshError("mesh is not a closed, oriented 2-manifold after merging; ", *_REPAIR_HINT)
     ne = len(uniq)
     E = np.empty((ne, 2), np.int64)
     E[inv, 0] = lo
