@@ -231,8 +231,8 @@ def intersection_volume(
     intersector = ExactIntersector(
         [(A.vertices, A.faces)], [(B.vertices, B.faces)], broadphase=library, n_jobs=n_jobs
     )
-    volumes = intersector.volumes(arr)
-    bounds = intersector.volume_bounds
+    result = intersector.intersect(arr)
+    volumes, bounds = result.volumes, result.volume_bounds
     if single:
         volumes, bounds = float(volumes), float(bounds)
     return (volumes, bounds) if return_bounds else volumes

@@ -331,3 +331,55 @@ def test_the_message_rule_catches_rewriting():
     ]
     assert all(message_readers(ast.parse(code)) for code in bad)
     assert not any(message_readers(ast.parse(code)) for code in good)
+
+
+# -- results are returned -------------------------------------------------------------------
+
+
+def state_writes(tree: ast.AST) -> list[str]:
+    """``self.x = ...`` in a method other than ``__init__``, outside a ``with`` block: state a
+    call leaves behind. A value built once and shared (a cache) is built under a lock."""
+    parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
+    found = []
+    for cls in (n for n in ast.walk(tree) if isinstance(n, ast.ClassDef)):
+        for method in cls.body:
+            if not isinstance(method, ast.FunctionDef) or method.name == "__init__":
+                continue
+            for node in ast.walk(method):
+                targets = (
+                    node.targets
+                    if isinstance(node, ast.Assign)
+                    else [node.target]
+                    if isinstance(node, ast.AugAssign | ast.AnnAssign)
+                    else []
+                )
+                for target in targets:
+                    if not (
+                        isinstance(target, ast.Attribute)
+                        and isinstance(target.value, ast.Name)
+                        and target.value.id == "self"
+                    ):
+                        continue
+                    up = parents[node]
+                    while up is not method and not isinstance(up, ast.With):
+                        up = parents[up]
+                    if up is method:
+                        found.append(f"{cls.name}.{method.name}: {ast.unparse(target)}")
+    return found
+
+
+@pytest.mark.parametrize("module", sorted(m for m in MODULES if room(m) == "backends"))
+def test_no_backend_keeps_results_as_attributes(module):
+    """A backend or intersector returns what a call computed (`ExactIntersector.intersect`
+    returns an `Intersection`); it keeps nothing of the last call, which would describe
+    another call after the next one and race between threads."""
+    found = state_writes(ast.parse(MODULES[module].read_text()))
+    assert not found, f"{module} keeps results of a call on the object: {found}"
+
+
+def test_the_state_rule_catches_last_call_results():
+    code = "class A:\n    def __init__(self):\n        self.a = 1\n    def f(self):\n        {}"
+    assert state_writes(ast.parse(code.format("self.stats = {}")))
+    assert state_writes(ast.parse(code.format("self.n += 1")))
+    assert not state_writes(ast.parse(code.format("with self.lock:\n            self.c = 2")))
+    assert not state_writes(ast.parse(code.format("x = self.a")))

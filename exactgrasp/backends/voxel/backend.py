@@ -34,11 +34,23 @@ SURFACE_SAMPLE_MODES = ("generate", "none")
 MAX_RESOLUTION = 1000
 
 # Grids, points and hand volumes shared by every VoxelBackend in the process, keyed by the
-# geometry's hash and the parameters they depend on: `compute_descriptor` builds a new backend
-# per call.
+# geometry's hash and the values of the parameters they depend on, named here: a backend is
+# often built per call (`compute_descriptor`), its geometry reused.
 _HAND_GRIDS = LRUCache(defaults.VOXEL_CACHE_SIZE)
 _OBJECT_POINTS = LRUCache(defaults.VOXEL_CACHE_SIZE)
 _HAND_VOLUMES = LRUCache(defaults.VOXEL_CACHE_SIZE)
+#: The parameters the hand's grid depends on (with ``grasp.hand_key``).
+GRID_PARAMETERS = ("hand_resolution", "grid")
+#: The parameters the object's points depend on (with ``grasp.object_key``): every one but
+#: the hand's resolution.
+POINT_PARAMETERS = (
+    "object_resolution",
+    "surface_spacing",
+    "surface_samples",
+    "surface_weight",
+    "seed",
+    "grid",
+)
 
 # Poses per piece at least when progress is reported: a piece takes a fraction of a second,
 # and each starts the kernel's threads anew.
@@ -156,7 +168,7 @@ class VoxelBackend(Backend):
         """
         hand_key = getattr(grasp, "hand_key", None)
         return _HAND_GRIDS.get(
-            None if hand_key is None else (hand_key, self.hand_resolution, self.grid),
+            None if hand_key is None else (hand_key, *self._values(GRID_PARAMETERS)),
             lambda: hand_occupancy(grasp.canonical_hand_links(), self.hand_resolution, self.grid),
         )
 
@@ -187,10 +199,12 @@ class VoxelBackend(Backend):
             )
 
         object_key = getattr(grasp, "object_key", None)
-        params = self.params
-        del params["hand_resolution"]
-        key = None if object_key is None else (object_key, *params.values())
+        key = None if object_key is None else (object_key, *self._values(POINT_PARAMETERS))
         return _OBJECT_POINTS.get(key, build)
+
+    def _values(self, names: tuple[str, ...]) -> tuple:
+        """The values of the parameters ``names``, for a cache key."""
+        return tuple(getattr(self, name) for name in names)
 
     def hand_volume(self, grasp: Grasp) -> float:
         """The hand's volume (union of its links), cubed canonical units.
