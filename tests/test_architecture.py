@@ -383,3 +383,59 @@ def test_the_state_rule_catches_last_call_results():
     assert state_writes(ast.parse(code.format("self.n += 1")))
     assert not state_writes(ast.parse(code.format("with self.lock:\n            self.c = 2")))
     assert not state_writes(ast.parse(code.format("x = self.a")))
+
+
+# -- declared parameters ------------------------------------------------------------------
+
+
+def invalid_values(param) -> list:
+    """Values no constraint of ``param`` admits, generated from its constraints (as
+    scikit-learn's ``check_param_validation`` does): just past each bound, the wrong kind of
+    number, NaN, a bool, text, None and an object no option lists."""
+    from exactgrasp.backends.params import Interval
+
+    candidates = [object(), "not-an-option", float("nan"), float("inf"), True, None, [1], 0.5]
+    for constraint in param.allowed:
+        if isinstance(constraint, Interval):
+            step = 1 if constraint.kind.__name__ == "Integral" else 1e-9
+            for bound, past in ((constraint.lo, -step), (constraint.hi, step)):
+                if bound is not None:
+                    candidates += [bound + past, bound, float(bound) + 0.5 * past]
+    return [v for v in candidates if param.admits(v) is NotImplemented]
+
+
+def backend_classes() -> dict:
+    from exactgrasp.backends import registry
+
+    return {name: registry.backend_class(name) for name in registry.available_backends()}
+
+
+@pytest.mark.parametrize("name", sorted(backend_classes()))
+def test_declared_constraints_match_the_constructor(name):
+    import inspect
+
+    cls = backend_classes()[name]
+    signature = inspect.signature(cls.__init__).parameters
+    kinds = {p.kind for p in signature.values()}
+    assert inspect.Parameter.VAR_KEYWORD not in kinds, f"{name} hides options in **kwargs"
+    assert list(signature)[1:] == list(cls.parameter_constraints), (
+        f"{name}: the constructor takes {list(signature)[1:]}, the constraints declare "
+        f"{list(cls.parameter_constraints)}"
+    )
+    for key, param in cls.parameter_constraints.items():
+        default = signature[key].default
+        assert param.admits(default) is not NotImplemented, f"{name}.{key}: default refused"
+
+
+@pytest.mark.parametrize("name", sorted(backend_classes()))
+def test_invalid_values_generated_from_the_constraints_are_refused(name):
+    from exactgrasp.errors import BackendError
+
+    cls = backend_classes()[name]
+    tried = 0
+    for key, param in cls.parameter_constraints.items():
+        for value in invalid_values(param):
+            with pytest.raises(BackendError, match=rf"{key} must be"):
+                cls(**{key: value})
+            tried += 1
+    assert tried >= 5 * len(cls.parameter_constraints)

@@ -18,6 +18,7 @@ from exactgrasp.backends.exact import (
     plain_volumes,
     repeated_poses,
 )
+from exactgrasp.backends.registry import get_backend
 from exactgrasp.datapath import data_dir
 from exactgrasp.errors import BackendError, MeshError, MissingDependencyError
 
@@ -395,8 +396,12 @@ def test_backend_validates_parameters(monkeypatch):
         ExactBackend(broadphase="bullet")
     with pytest.raises(BackendError, match="n_jobs"):
         ExactBackend(n_jobs=0)
-    with pytest.raises(BackendError, match=r"unknown parameters \[.voxel.\]"):
+    # Its options are the constructor's arguments: an unknown one is Python's TypeError, and
+    # through the registry a BackendError naming it.
+    with pytest.raises(TypeError, match="voxel"):
         ExactBackend(voxel=3)
+    with pytest.raises(BackendError, match=r"bad parameters \['voxel'\]"):
+        get_backend("exact", voxel=3)
     import sys
 
     monkeypatch.setitem(sys.modules, "coal", None)  # makes `import coal` fail

@@ -63,8 +63,8 @@ def backend_names() -> list[str]:
 def declared_parameters(cls: type[Backend]) -> dict[str, tuple[Param, Any]]:
     """``{key: (constraint, default)}`` of a backend class, in declaration order.
 
-    The default is the constructor's (``inspect.Parameter.empty`` when it has none, e.g. a
-    ``**tuning`` option whose hint gives it).
+    The default is the constructor's (``inspect.Parameter.empty`` when it has none: a
+    plugin backend may take options through ``**kwargs``; the hint then says it).
     """
     signature = inspect.signature(cls.__init__).parameters
     out = {}
