@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
+from exactgrasp.backends import defaults
 from exactgrasp.backends.base import check_poses
 from exactgrasp.backends.exact import ExactIntersector
 from exactgrasp.errors import BackendError, Fix, MeshError
@@ -30,10 +31,6 @@ ACCEPTED = (
     "path of a mesh file (STL, OBJ, PLY, OFF, GLB)"
 )
 BROADPHASES = ("auto", "coal", "fcl", None)
-#: ``broadphase="auto"`` builds coal's BVH for stacks of more poses than this: building it
-#: costs about what the kernel spends on a few hundred poses, and it only saves the kernel's
-#: time on poses whose surfaces are apart.
-AUTO_BVH_POSES = 256
 UNIT_NAMES = sorted(set(UNITS) - {"in"})
 
 
@@ -126,14 +123,14 @@ def _units_pair(units: Any) -> tuple[str, str]:
 
 def _broadphase(broadphase: Any, n_poses: int) -> str | None:
     """The broad phase to build with: ``"auto"`` is coal where it is installed and the stack
-    holds more than `AUTO_BVH_POSES` poses, else None."""
+    holds more than `defaults.OVERLAP_AUTO_BVH_POSES` poses, else None."""
     if broadphase not in BROADPHASES:
         raise BackendError(
             f"broadphase={broadphase!r}; use 'auto', 'coal', 'fcl' or None (results do not "
             "depend on it)."
         )
     if broadphase == "auto":
-        many = n_poses > AUTO_BVH_POSES
+        many = n_poses > defaults.OVERLAP_AUTO_BVH_POSES
         return "coal" if many and importlib.util.find_spec("coal") is not None else None
     return broadphase
 
@@ -163,8 +160,8 @@ def intersection_volume(
     repair: bool = False,
     check_scale: bool = True,
     return_bounds: bool = False,
-    broadphase: str | None = "auto",
-    n_jobs: int = 1,
+    broadphase: str | None = defaults.OVERLAP_BROADPHASE,
+    n_jobs: int = defaults.OVERLAP_N_JOBS,
 ) -> Any:
     """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3.
 
@@ -193,11 +190,12 @@ def intersection_volume(
     return_bounds : bool
         Also return each volume's certified error bound (m^3).
     broadphase : {"auto", "coal", "fcl", None}
-        Library that skips poses whose surfaces are apart; ``"auto"``: coal where installed,
-        for stacks of more than `AUTO_BVH_POSES` poses (its BVH takes longer to build than
-        it saves on fewer). The volumes do not depend on it.
+        Library that skips poses whose surfaces are apart; ``"auto"`` (default): coal where
+        installed, for stacks of more than `defaults.OVERLAP_AUTO_BVH_POSES` poses (its BVH
+        takes longer to build than it saves on fewer). The volumes do not depend on it.
     n_jobs : int
-        Threads over poses (-1: every core). The volumes do not depend on it.
+        Threads over poses (-1: every core; default `defaults.OVERLAP_N_JOBS`). The volumes
+        do not depend on it.
 
     Returns
     -------
