@@ -3,8 +3,7 @@
 Two meshes in any of the usual forms (trimesh meshes, `Solid`s, (vertices, faces) pairs, mesh
 files) go through the same intake as every `Solid` (units, repair, shells), then through the
 exact backend's `ExactIntersector` (certified error bounds, manifold3d boolean where a sign
-cannot be certified). See ``docs/penetration-volume.md``. Imports `exactgrasp.errors`,
-`exactgrasp.geometry` and `exactgrasp.backends` only.
+cannot be certified). See ``docs/penetration-volume.md``.
 """
 
 from __future__ import annotations

@@ -439,3 +439,16 @@ def test_invalid_values_generated_from_the_constraints_are_refused(name):
                 cls(**{key: value})
             tried += 1
     assert tried >= 5 * len(cls.parameter_constraints)
+
+
+#: A docstring sentence listing a module's imports ("Imports `x` and numpy.", "May import: ...").
+IMPORT_LIST = re.compile(r"(^|\s)(May import:|Imports:?\s+(`|numpy|numba|only|the\b))")
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_docstrings_do_not_list_imports_by_hand(module):
+    """What a module may import is the layers' rule, checked above from the source; a list
+    written by hand in a docstring goes stale unchecked."""
+    docstring = ast.get_docstring(ast.parse(MODULES[module].read_text())) or ""
+    match = IMPORT_LIST.search(docstring)
+    assert not match, f"{module}'s docstring lists its imports: {match.group(0).strip()} ..."

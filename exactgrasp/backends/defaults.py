@@ -1,7 +1,7 @@
 """Default values of the backends and of the code that picks them: the one place they are set.
 
-Imports nothing; the backends, `exactgrasp.descriptor`, `exactgrasp.compare`,
-`exactgrasp.overlap`, the batch runner and the command line read their defaults from here.
+The backends, `exactgrasp.descriptor`, `exactgrasp.compare`, `exactgrasp.overlap`, the batch
+runner and the command line read their defaults from here.
 """
 
 from __future__ import annotations

@@ -3,8 +3,7 @@
 `BACKENDS` maps a name to a `BackendEntry` (a class, or a ``"module:Class"`` path imported on
 first use); the entry point group ``exactgrasp.backends`` is read on every lookup and fills in
 the names `BACKENDS` lacks. `shared_backend` keeps one instance per (name, parameters), so the
-per-geometry caches of a backend serve every later grasp. Imports the backends' base,
-defaults, `exactgrasp.cache` and `exactgrasp.errors`.
+per-geometry caches of a backend serve every later grasp.
 """
 
 from __future__ import annotations

@@ -6,10 +6,6 @@ existing scheduler); the workers only compute and send results back, and this pr
 every file, so workers need no shared file system and each part is renamed into place whole.
 A resume skips the parts already there. See ``docs/batch.md`` for the file layout and the
 choices made; the ``exactgrasp batch`` command is `exactgrasp.cli.batch`.
-
-May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.progress`, `exactgrasp.paths`,
-`exactgrasp.backends`, `exactgrasp.diagnostics`, the other `exactgrasp.batch` modules; never
-`exactgrasp.cli`.
 """
 
 from __future__ import annotations

@@ -4,8 +4,7 @@
 as `run_batch`'s ``units``, ``repair`` and ``on_limit`` do; errors name the flags, not those
 arguments.
 
-May import: `exactgrasp.errors`, `exactgrasp.cli.common`, `exactgrasp.cli.params`,
-`exactgrasp.batch` (pyarrow and distributed load only when a batch runs).
+pyarrow and distributed load only when a batch runs.
 """
 
 from __future__ import annotations

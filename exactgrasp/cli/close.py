@@ -3,9 +3,6 @@
 The command-line face of `exactgrasp.grasp.closing.close_fingers` (as `close_grasp` applies
 it to a grasp): writes the closed grasp file and prints, finger by finger, each closing
 joint's value and whether the finger touches the object.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry.bvh`, `exactgrasp.grasp`,
-`exactgrasp.cli.common`.
 """
 
 from __future__ import annotations

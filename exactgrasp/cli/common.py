@@ -6,9 +6,6 @@ Each option is defined here once, so every command spells, checks and documents 
 way; errors name the flag, never the Python argument behind it: `FlagTerms` spells the fixes
 that errors carry (`exactgrasp.errors.Fix`) as flags. ``--param`` lives in
 `exactgrasp.cli.params`.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry.intake`, `exactgrasp.paths`,
-`exactgrasp.grasp`, `exactgrasp.backends.defaults`; no other `exactgrasp.cli` module.
 """
 
 from __future__ import annotations

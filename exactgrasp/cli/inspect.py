@@ -6,9 +6,6 @@ that could be the hand, and what `exactgrasp.hands.loading.load_model` makes of 
 (joints, palm frame, the joints `exactgrasp.grasp.closing.close_fingers` closes and their
 directions): enough to choose ``root_body``, the palm frame and the closing joints without
 reading XML.
-
-May import: `exactgrasp.errors`, `exactgrasp.cli.common`, `exactgrasp.hands` (builtins, hand,
-loading, scene) and `exactgrasp.grasp.closing`.
 """
 
 from __future__ import annotations

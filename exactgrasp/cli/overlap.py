@@ -3,9 +3,6 @@
 The command-line face of `exactgrasp.overlap.intersection_volume`: prints the volume of A ∩ B
 (B moved by ``--pose``) and its certified error bound, in m^3 (see
 ``docs/penetration-volume.md``).
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry.intake`, `exactgrasp.backends.base`,
-`exactgrasp.overlap`, `exactgrasp.cli.common`.
 """
 
 from __future__ import annotations

@@ -5,9 +5,6 @@ Nothing here names a parameter: the keys, what each may be and its default are r
 backend class (`Backend.parameter_constraints`, the constructor's signature) when a command
 checks its ``--param`` items or prints its ``--help``, so a new parameter, or a new backend,
 shows up without touching the command line.
-
-May import: `exactgrasp.errors`, `exactgrasp.backends` (registry, base, params, defaults),
-`exactgrasp.cli.common`.
 """
 
 from __future__ import annotations

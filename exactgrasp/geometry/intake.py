@@ -1,7 +1,6 @@
 """Reading meshes and points into the library: units, file loading, sample points.
 
-What `exactgrasp.geometry.solid.Solid` uses to take meshes in. Imports only `exactgrasp.errors`,
-numpy and trimesh.
+What `exactgrasp.geometry.solid.Solid` uses to take meshes in.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Everything in exactgrasp that hands meshes to manifold3d goes through `to_manifold`, which
 refuses, naming the mesh, the defect and the fix, what manifold3d cannot take as a solid.
-Double precision throughout (``Mesh64``). Imports only `exactgrasp.errors`, numpy and manifold3d.
+Double precision throughout (``Mesh64``).
 """
 
 from __future__ import annotations

@@ -2,8 +2,7 @@
 
 Every mesh that enters the library goes through `Solid`, which refuses anything that is not a
 closed, consistently oriented surface of positive volume, with a message that names the input,
-the defect and the fix. Imports only `exactgrasp.errors`, other `exactgrasp.geometry` modules
-(`intake`, `shells`), numpy and trimesh.
+the defect and the fix.
 """
 
 from __future__ import annotations

@@ -6,9 +6,6 @@ object pose; `backoff` moves the object out of an open hand that penetrates it; 
 closes one finger by conservative advancement on exact mesh distances, with bisection as the
 safety net, each joint in its direction (`infer_directions` when none is given). The public
 API is `exactgrasp.grasp.closing`.
-
-Imports `exactgrasp.errors`, `exactgrasp.cache`, `exactgrasp.geometry` (bvh, solid, winding)
-and `exactgrasp.hands.hand`.
 """
 
 from __future__ import annotations

@@ -5,8 +5,6 @@ Errors from reading the object or the hand are re-raised as errors of the grasp 
 it, the key concerned and the fix as the file spells it (``"object_repair": true``, not
 ``repair=True``), from the fixes the errors carry (`exactgrasp.errors.Fix`), never from their
 text. Hands are read and written through `exactgrasp.hands.sources.HAND_SOURCES`.
-Imports `exactgrasp.errors`, `exactgrasp.geometry` (files, intake, solid), `exactgrasp.hands`
-(frame, hand, sources) and `exactgrasp.grasp.schema`; never `exactgrasp.grasp.grasp`.
 """
 
 from __future__ import annotations

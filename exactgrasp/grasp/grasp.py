@@ -6,9 +6,6 @@ relative to the file, ``object_units``, ``object_pose_in_hand`` from object metr
 coordinates, ``joints``) and those written here (``format``, ``hand`` for hands that are not a
 model file, ``hand_options``, ``hand_frame``). Files are checked against the schema before
 anything is read.
-
-Imports `exactgrasp.errors`, `exactgrasp.geometry` (se3, solid), `exactgrasp.hands` (frame,
-hand) and `exactgrasp.grasp` files and schema.
 """
 
 from __future__ import annotations

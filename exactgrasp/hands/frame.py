@@ -4,8 +4,6 @@ Origin half-way along the palm normal between the palm and the outside of the lo
 fingers; axes: z "out" of the palm, y "up" towards the enclosing finger(s), x = y × z; scaled
 so that half the palm-to-fingertip depth ``d`` is 1. Paths of length 1 then take the object out
 of the hand, whatever the hand's size.
-
-Imports only `exactgrasp.errors` and numpy.
 """
 
 from __future__ import annotations

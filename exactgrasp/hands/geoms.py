@@ -1,9 +1,7 @@
 """Geoms of a compiled MuJoCo model as closed meshes: type codes, welding, `collect_geoms`.
 
 With ``repair=True`` a mesh geom that is not a closed solid is repaired as
-`exactgrasp.geometry.solid.Solid` repairs a mesh (``Solid(repair=True)``). Imports
-`exactgrasp.errors`, `exactgrasp.geometry` (primitives, shells, solid), numpy and scipy;
-nothing else of `exactgrasp.hands`.
+`exactgrasp.geometry.solid.Solid` repairs a mesh (``Solid(repair=True)``).
 """
 
 from __future__ import annotations
@@ -205,7 +203,7 @@ def collect_geoms(
     tessellation: int,
     source: str,
     *,
-    repair: bool = False,
+    repair: bool,
 ) -> tuple[list[tuple[str, int, np.ndarray, np.ndarray]], tuple[str, ...]]:
     """The hand's geoms as closed meshes in their own frames.
 

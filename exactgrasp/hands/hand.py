@@ -4,9 +4,6 @@ A `Hand` wraps a hand model (a `RigidModel` of fixed meshes, or an MJCF/URDF mod
 mujoco, see `exactgrasp.hands.model`) at one joint configuration, with its `HandFrame`. Its volume
 is the volume of the UNION of its links: real link meshes overlap and an overlap is hand once.
 `HandModel` is what a Hand needs of its model.
-
-Imports `exactgrasp.errors`, `exactgrasp.geometry` (manifold, solid) and `exactgrasp.hands`
-frame, loading and noise.
 """
 
 from __future__ import annotations

@@ -7,8 +7,7 @@ returned in the frame of the hand's root body (the URDF base link, or ``root_bod
 where the hand stands in a scene file does not matter. Build one with
 `exactgrasp.hands.loading.load_model`.
 
-Imports `exactgrasp.errors`, `exactgrasp.hands` geoms, joints, palm and scene, numpy; mujoco is
-loaded on first use (it is a core dependency, but importing exactgrasp stays light).
+mujoco is loaded on first use (a core dependency, but importing exactgrasp stays light).
 """
 
 from __future__ import annotations
@@ -54,7 +53,7 @@ class KinematicModel:
         geometry,
         tessellation,
         couplings,
-        repair=False,
+        repair,
     ):
         import mujoco  # here, not at the top: importing exactgrasp stays light
 

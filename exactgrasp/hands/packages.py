@@ -7,8 +7,6 @@ folder, or folders holding packages), then the ``ROS_PACKAGE_PATH`` environment 
 file's own folder and its parents. A folder is package NAME when its ``package.xml`` says so
 or when it is named NAME. `rewrite_urdf` and `rewrite_spec` replace the URIs of a model by
 absolute paths before MuJoCo compiles it.
-
-Imports `exactgrasp.errors` only (and the standard library).
 """
 
 from __future__ import annotations

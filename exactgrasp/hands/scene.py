@@ -7,8 +7,6 @@ are refused with the candidates listed. A body with a free joint is a loose obje
 hand link unless it is the hand's own root. `body_tree` lists bodies, joints, geoms and sites
 (the ``exactgrasp inspect`` command), so that ``root_body``, the palm frame and the closing
 joints can be chosen without reading the XML.
-
-Imports `exactgrasp.errors`, `exactgrasp.hands.geoms` (type codes) and numpy.
 """
 
 from __future__ import annotations

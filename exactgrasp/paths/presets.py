@@ -4,8 +4,6 @@ Every entry point (``compute_descriptor``, ``compare_backends``, ``run_batch`` a
 command line) goes through `as_sampler`, so they accept the same forms and fail with the same
 message. The preset table itself, `PRESETS`, lives beside `PathSampler.preset` in
 `exactgrasp.paths.sampler` (this module imports that one, never the reverse).
-
-May import: `exactgrasp.errors`, `exactgrasp.paths.sampler`.
 """
 
 from __future__ import annotations

@@ -6,8 +6,6 @@ axes come from the spiral phyllotaxis pattern on the sphere; rotation amounts ar
 over the circle of angles. See ``docs/conventions.md`` for every choice made here. The named
 settings (`PRESETS`) are here beside `PathSampler.preset`; the coercion of user input into a
 sampler is `exactgrasp.paths.presets.as_sampler`.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry.se3`.
 """
 
 from __future__ import annotations

@@ -4,8 +4,6 @@ Everything is in the hand's canonical frame (see `exactgrasp.hands.frame`), wher
 paths live: one unit is half the palm-to-fingertip depth, the distance a translation path
 travels by ``t = 1``. The renderers (`exactgrasp.view.html`, `exactgrasp.view.png`) only draw
 what `build_scene` returns.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry`, `exactgrasp.paths`, `exactgrasp.grasp`.
 """
 
 from __future__ import annotations

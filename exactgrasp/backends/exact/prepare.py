@@ -1,8 +1,7 @@
 """Once-per-grasp tables of the exact backend: mesh topology, the hand's face, edge and part
 terms with their error bounds, and the object's pose-independent terms.
 
-See "Method, once per grasp" and "The volume's bound" in ``docs/exact-backend.md``. Imports
-numpy, `errors`, `grids`, `sums` (face terms), `tables` and `tolerances`.
+See "Method, once per grasp" and "The volume's bound" in ``docs/exact-backend.md``.
 """
 
 from __future__ import annotations

@@ -8,8 +8,7 @@ points apart: ``volume = interior_inside * V_o + surface_inside * w_s``.
 of boxes and skips, or counts whole, the boxes that the hand's summed tables decide);
 `estimate_counts_numpy` is the same estimator in plain vectorised numpy, every point of every
 pose tested. Both evaluate every point they test with the same floating-point operations in
-the same order, so their counts are identical. Imports `exactgrasp.backends.base` and the
-voxel room's grids and points only.
+the same order, so their counts are identical.
 """
 
 from __future__ import annotations
