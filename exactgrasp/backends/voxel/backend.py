@@ -19,7 +19,7 @@ from exactgrasp.backends import defaults
 from exactgrasp.backends.base import PROGRESS_PIECES, Backend, check_poses
 from exactgrasp.backends.params import Interval, Options, Param, validate_parameters
 from exactgrasp.backends.voxel.grids import GRID_RULES, HandOccupancy, hand_occupancy
-from exactgrasp.backends.voxel.kernel import estimate_volumes
+from exactgrasp.backends.voxel.kernel import volumes_of_checked
 from exactgrasp.backends.voxel.points import ObjectPoints, object_points
 from exactgrasp.cache import LRUCache
 from exactgrasp.errors import BackendError
@@ -231,8 +231,11 @@ class VoxelBackend(Backend):
         -------
         numpy.ndarray, shape poses.shape[:-2], float64
         """
-        poses = check_poses(poses)
-        return estimate_volumes(self.hand_grid(grasp), self.object_point_set(grasp), poses)
+        return self._volumes(grasp, check_poses(poses))
+
+    def _volumes(self, grasp: Grasp, poses: np.ndarray) -> np.ndarray:
+        """`volumes` of poses `check_poses` returned."""
+        return volumes_of_checked(self.hand_grid(grasp), self.object_point_set(grasp), poses)
 
     def volumes_with_progress(
         self, grasp: Grasp, poses: np.ndarray, advance: Callable[[int], Any] | None = None
@@ -258,7 +261,7 @@ class VoxelBackend(Backend):
         step = max(_PROGRESS_POSES, -(-len(flat) // PROGRESS_PIECES))
         out = np.empty(len(flat))
         for start in range(0, len(flat), step):
-            out[start : start + step] = self.volumes(grasp, flat[start : start + step])
+            out[start : start + step] = self._volumes(grasp, flat[start : start + step])
             if advance is not None:
                 advance(len(flat[start : start + step]))
         return out.reshape(poses.shape[:-2])
