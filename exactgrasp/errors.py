@@ -186,8 +186,14 @@ class MeshError(ExactGraspError, ValueError):
     """A mesh is unusable as a solid (not closed, NaN coordinates, no faces, ...)."""
 
 
-class GraspFileError(ExactGraspError, ValueError):
-    """A grasp JSON file is malformed or names files that do not exist."""
+class GraspError(ExactGraspError, ValueError):
+    """A grasp that cannot be: a hand or object of the wrong kind, a pose that is not a rigid
+    transform."""
+
+
+class GraspFileError(GraspError):
+    """A grasp JSON file is malformed, names files that do not exist, or holds a grasp that
+    cannot be."""
 
 
 class JointError(ExactGraspError, ValueError):

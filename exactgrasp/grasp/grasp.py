@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import Fix, GraspFileError
+from exactgrasp.errors import Fix, GraspError, GraspFileError
 from exactgrasp.geometry.se3 import rigid_defect
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.grasp.files import (
@@ -58,12 +58,12 @@ def check_pose(pose: Any, name: str = "object_pose") -> np.ndarray:
     """
     arr = np.array(pose, dtype=np.float64)  # a copy: the caller's array may change later
     if arr.shape != (4, 4):
-        raise GraspFileError(f"{name} must be a 4x4 matrix, got shape {arr.shape}.")
+        raise GraspError(f"{name} must be a 4x4 matrix, got shape {arr.shape}.")
     if not np.all(np.isfinite(arr)):
-        raise GraspFileError(f"{name} contains NaN or infinite entries.")
+        raise GraspError(f"{name} contains NaN or infinite entries.")
     what = rigid_defect(arr, POSE_ATOL)
     if what is not None:
-        raise GraspFileError(
+        raise GraspError(
             f"{name} is not a rigid transform: {what}. Give a rotation (orthonormal, "
             f"determinant +1, to {POSE_ATOL:g}) and a translation in metres, last row 0 0 0 1; "
             "a mesh in other units takes ",
@@ -89,9 +89,9 @@ class Grasp:
 
     def __init__(self, hand: Hand, object: Solid, object_pose: Any = None, name: str = ""):
         if not isinstance(hand, Hand):
-            raise GraspFileError(f"hand must be an exactgrasp Hand, got {type(hand).__name__}.")
+            raise GraspError(f"hand must be an exactgrasp Hand, got {type(hand).__name__}.")
         if not isinstance(object, Solid):
-            raise GraspFileError(
+            raise GraspError(
                 f"object must be an exactgrasp Solid, got {type(object).__name__}; wrap meshes "
                 "with Solid.from_trimesh or Solid.from_file."
             )
@@ -226,8 +226,8 @@ class Grasp:
         hand = read_hand(data, base_dir, source, overrides)
         try:
             pose = check_pose(data["object_pose_in_hand"], f"{source}: object_pose_in_hand")
-        except GraspFileError as exc:
-            raise exc.respelled(file_terms, keys=OBJECT_KEYS) from exc
+        except GraspError as exc:
+            raise exc.respelled(file_terms, keys=OBJECT_KEYS, cls=GraspFileError) from exc
         return cls(hand, obj, pose, name=data.get("name", Path(source).stem))
 
     def to_dict(self, base_dir: str | os.PathLike = ".", sidecar_stem: str = "grasp") -> dict:

@@ -188,7 +188,7 @@ class Hand:
             raise MeshError("from_meshes needs at least one link mesh, got none.")
         names = list(names) if names is not None else [f"link{i}" for i in range(len(meshes))]
         if len(names) != len(meshes):
-            raise JointError(f"{len(names)} names for {len(meshes)} meshes; give one per mesh.")
+            raise MeshError(f"{len(names)} names for {len(meshes)} meshes; give one per mesh.")
         links = [
             (name, _as_solid(mesh, units, name)) for name, mesh in zip(names, meshes, strict=True)
         ]
