@@ -49,6 +49,7 @@ def __getattr__(name: str):
         "compare_backends": ("exactgrasp.compare", "compare_backends"),
         "run_batch": ("exactgrasp.batch", "run_batch"),
         "read_batch": ("exactgrasp.batch", "read_batch"),
+        "intersection": ("exactgrasp.overlap", "intersection"),
         "intersection_volume": ("exactgrasp.overlap", "intersection_volume"),
         "show": ("exactgrasp.view", "show"),
     }
@@ -90,6 +91,7 @@ __all__ = [
     "distance",
     "get_backend",
     "hands",
+    "intersection",
     "intersection_volume",
     "joint_noise",
     "object_pose_noise",

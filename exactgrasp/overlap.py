@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -22,7 +23,7 @@ from exactgrasp.errors import BackendError, Fix, MeshError
 from exactgrasp.geometry.intake import UNITS, unit_scale
 from exactgrasp.geometry.solid import Solid
 
-__all__ = ["as_solid", "intersection_volume"]
+__all__ = ["Overlap", "as_solid", "intersection", "intersection_volume"]
 
 #: What `as_solid` takes, for messages.
 ACCEPTED = (
@@ -149,6 +150,22 @@ def _check_backend(backend: Any) -> None:
     )
 
 
+@dataclass(frozen=True)
+class Overlap:
+    """What `intersection` found: the volumes of a ∩ moved b and their certified bounds.
+
+    Attributes
+    ----------
+    volumes : float or numpy.ndarray
+        m^3: a float for a single pose, else an array of shape ``poses.shape[:-2]``.
+    bounds : float or numpy.ndarray
+        Alike in shape: ``|volume - true volume| <= bound`` (m^3).
+    """
+
+    volumes: Any
+    bounds: Any
+
+
 def intersection_volume(
     a: Any,
     b: Any,
@@ -158,11 +175,37 @@ def intersection_volume(
     units: str | tuple[str, str] = "m",
     repair: bool = False,
     check_scale: bool = True,
-    return_bounds: bool = False,
     broadphase: str | None = defaults.OVERLAP_BROADPHASE,
     n_jobs: int = defaults.OVERLAP_N_JOBS,
 ) -> Any:
-    """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3.
+    """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3: `intersection`'s
+    volumes alone (see there for every argument).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        m^3: a float when ``poses`` is None or one (4, 4) pose, else an array of shape
+        ``poses.shape[:-2]``.
+    """
+    options = {"units": units, "repair": repair, "check_scale": check_scale}
+    return intersection(
+        a, b, poses, backend, **options, broadphase=broadphase, n_jobs=n_jobs
+    ).volumes
+
+
+def intersection(
+    a: Any,
+    b: Any,
+    poses: Any = None,
+    backend: str = "exact",
+    *,
+    units: str | tuple[str, str] = "m",
+    repair: bool = False,
+    check_scale: bool = True,
+    broadphase: str | None = defaults.OVERLAP_BROADPHASE,
+    n_jobs: int = defaults.OVERLAP_N_JOBS,
+) -> Overlap:
+    """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3, with its bound.
 
     Both meshes are read as `Solid`s (metres; overlapping shells merged, cavities kept, open
     or self-crossing surfaces refused) and intersected with the exact backend's
@@ -186,8 +229,6 @@ def intersection_volume(
         Let trimesh and pymeshfix close and orient both meshes, with a warning.
     check_scale : bool
         Refuse a mesh longer than 5 m after the unit conversion (see `Solid`).
-    return_bounds : bool
-        Also return each volume's certified error bound (m^3).
     broadphase : {"auto", "coal", "fcl", None}
         Library that skips poses whose surfaces are apart; ``"auto"`` (default): coal where
         installed, for stacks of more than `defaults.OVERLAP_AUTO_BVH_POSES` poses (its BVH
@@ -198,10 +239,10 @@ def intersection_volume(
 
     Returns
     -------
-    float or numpy.ndarray
-        m^3: a float when ``poses`` is None or one (4, 4) pose, else an array of shape
-        ``poses.shape[:-2]``. With ``return_bounds``, the pair (volumes, bounds), alike in
-        shape: ``|volume - true volume| <= bound``.
+    Overlap
+        ``volumes`` in m^3: a float when ``poses`` is None or one (4, 4) pose, else an array
+        of shape ``poses.shape[:-2]``; ``bounds``, alike in shape:
+        ``|volume - true volume| <= bound``.
 
     Raises
     ------
@@ -224,7 +265,7 @@ def intersection_volume(
     B = as_solid(b, "b", units=units_b, repair=bool(repair), check_scale=check_scale)
     if arr.size == 0:
         empty = np.zeros(arr.shape[:-2])
-        return (empty, empty.copy()) if return_bounds else empty
+        return Overlap(empty, empty.copy())
     intersector = ExactIntersector(
         [(A.vertices, A.faces)], [(B.vertices, B.faces)], broadphase=library, n_jobs=n_jobs
     )
@@ -232,4 +273,4 @@ def intersection_volume(
     volumes, bounds = result.volumes, result.volume_bounds
     if single:
         volumes, bounds = float(volumes), float(bounds)
-    return (volumes, bounds) if return_bounds else volumes
+    return Overlap(volumes, bounds)

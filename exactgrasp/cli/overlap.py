@@ -18,7 +18,7 @@ from exactgrasp.backends.base import check_poses
 from exactgrasp.cli.common import GRASP_FLAGS, FlagTerms, flag, in_flag_terms
 from exactgrasp.errors import ExactGraspError
 from exactgrasp.geometry.intake import UNITS
-from exactgrasp.overlap import as_solid, intersection_volume
+from exactgrasp.overlap import as_solid, intersection
 
 __all__ = ["add_parser", "cmd_overlap", "read_pose", "read_units"]
 
@@ -109,7 +109,8 @@ def cmd_overlap(args: argparse.Namespace) -> int:
     try:
         a = as_solid(args.a, "A", units=units_a, **options)
         b = as_solid(args.b, "B", units=units_b, **options)
-        volumes, bounds = intersection_volume(a, b, poses, return_bounds=True)
+        result = intersection(a, b, poses)
+        volumes, bounds = result.volumes, result.bounds
     except ExactGraspError as exc:
         raise in_flag_terms(exc, TERMS) from exc
     if np.ndim(volumes) == 0:
