@@ -167,19 +167,18 @@ class Overlap:
 
 
 def intersection_volume(
-    a: Any,
-    b: Any,
-    poses: Any = None,
-    backend: str = "exact",
-    *,
-    units: str | tuple[str, str] = "m",
-    repair: bool = False,
-    check_scale: bool = True,
-    broadphase: str | None = defaults.OVERLAP_BROADPHASE,
-    n_jobs: int = defaults.OVERLAP_N_JOBS,
+    a: Any, b: Any, poses: Any = None, backend: str = "exact", **options: Any
 ) -> Any:
     """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3: `intersection`'s
-    volumes alone (see there for every argument).
+    volumes alone.
+
+    Parameters
+    ----------
+    a, b, poses, backend
+        As `intersection`.
+    **options
+        `intersection`'s keyword options (``units``, ``repair``, ``check_scale``,
+        ``broadphase``, ``n_jobs``).
 
     Returns
     -------
@@ -187,10 +186,7 @@ def intersection_volume(
         m^3: a float when ``poses`` is None or one (4, 4) pose, else an array of shape
         ``poses.shape[:-2]``.
     """
-    options = {"units": units, "repair": repair, "check_scale": check_scale}
-    return intersection(
-        a, b, poses, backend, **options, broadphase=broadphase, n_jobs=n_jobs
-    ).volumes
+    return intersection(a, b, poses, backend, **options).volumes
 
 
 def intersection(
