@@ -209,11 +209,9 @@ def collect_geoms(
 
     Parameters
     ----------
-    mj_model : mujoco.MjModel
-    in_tree : numpy.ndarray, shape (nbody,) bool
-        Bodies in the hand's subtree.
-    root : int
-        The hand's root body.
+    mj_model, in_tree, root
+        The compiled model, the bodies of the hand's subtree (nbody,) bool and its root body,
+        as `exactgrasp.hands.joints.collect_joints` takes them.
     body_names : list of str
         Name of every body, by id.
     geometry : {"collision", "visual", "all"}
