@@ -118,14 +118,15 @@ def main(argv: list[str] | None = None) -> int:
         exact_runs, plain_runs = [], []
         for _ in range(max(1, args.repeat)):
             t0 = time.perf_counter()
-            vol = ex.volumes(flat)
+            result = ex.intersect(flat)
             exact_runs.append(time.perf_counter() - t0)
+            vol = result.volumes
             t0 = time.perf_counter()
             ref = plain_volumes(links, bodies, flat[sub])
             plain_runs.append((time.perf_counter() - t0) / len(sub))
         per_descr = float(np.median(exact_runs))
         plain = float(np.median(plain_runs))
-        st = ex.stats
+        st = result.stats
         diff = np.abs(vol[sub] - ref) / np.maximum(np.abs(ref), 1e-300)
         parts = st["parts"] * st["poses"]
         records.append(

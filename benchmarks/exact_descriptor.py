@@ -86,8 +86,8 @@ def stage_times(path: Path, repeat: int) -> dict[str, list[float]]:
             t0, c0 = time.perf_counter(), time.process_time()
             computed = 0
             for start in range(0, poses.shape[0], chunk):
-                ex.volumes(poses[start : start + chunk])
-                computed += ex.stats["poses"] - ex.stats["poses_repeated"]
+                stats = ex.intersect(poses[start : start + chunk]).stats
+                computed += stats["poses"] - stats["poses_repeated"]
             add(
                 f"kernel, 1/20 of the paths per call, {jobs} thread(s)",
                 time.perf_counter() - t0,

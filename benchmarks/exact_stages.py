@@ -148,7 +148,8 @@ def main(argv: list[str] | None = None) -> int:
         print("a pose needs larger tables than the kernel's first ones; not timed")
         return 1
     volumes, counts = result
-    kernel = ex.volumes(canonical)
+    whole = ex.intersect(canonical)
+    kernel = whole.volumes
     if not np.array_equal(volumes, kernel):
         print("the staged composition does not give the kernel's volumes; not timed")
         return 1
@@ -177,9 +178,10 @@ def main(argv: list[str] | None = None) -> int:
         "seeds from object edges": counts[0] / n,
         "seeds from co-tree edges": counts[1] / n,
         "crossing face pairs": counts[2] / n,
-        "pairs evaluated": ex.stats["pairs_tested"] / ex.stats["poses"],
-        "hand parts classified vertex by vertex": ex.stats["parts_clipped"] / ex.stats["poses"],
-        "hand parts": ex.stats["parts"],
+        "pairs evaluated": whole.stats["pairs_tested"] / whole.stats["poses"],
+        "hand parts classified vertex by vertex": whole.stats["parts_clipped"]
+        / whole.stats["poses"],
+        "hand parts": whole.stats["parts"],
     }
     for name, value in per_pose.items():
         print(f"  {name:40s} {value:9.1f} a pose" if name != "hand parts" else f"  {name} {value}")

@@ -142,13 +142,12 @@ def nearby_poses(pose: np.ndarray, count: int, rng) -> np.ndarray:
 
 def run_case(case: dict, args, rng) -> dict:
     from exactgrasp.geometry.manifold import to_manifold
-    from exactgrasp.overlap import intersection_volume
+    from exactgrasp.overlap import intersection
 
     hand, obj, pose = load(case["file"])
     pose = translation(0, 0, -0.001 * case["push_mm"]) @ pose
-    exact_s, (volume, bound) = median_time(
-        lambda: intersection_volume(hand, obj, pose, return_bounds=True), args.repeat
-    )
+    exact_s, result = median_time(lambda: intersection(hand, obj, pose), args.repeat)
+    volume, bound = result.volumes, result.bounds
 
     def boolean() -> float:
         moved = to_manifold(obj.vertices, obj.faces, "object").transform(pose[:3, :])

@@ -132,8 +132,8 @@ def sweep(name: str, grasp: Grasp, args: argparse.Namespace, rng: np.random.Gene
     paths = rng.choice(len(table.direction), args.paths, replace=False)
     near = near_touching(ex, table.omega[paths], table.direction[paths])
     poses = np.concatenate([sampled, near])
-    got = ex.volumes(poses)
-    bounds = ex.volume_bounds.copy()
+    result = ex.intersect(poses)
+    got, bounds = result.volumes, result.volume_bounds
     coal = ExactIntersector(hand, obj, broadphase="coal", n_jobs=1).volumes(poses)
     checked = np.concatenate(
         [rng.choice(len(sampled), min(args.reference, len(sampled)), replace=False),

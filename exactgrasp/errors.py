@@ -1,17 +1,25 @@
-"""Exception types, `require` for optional dependencies, `warn_caller` and
-`run_reporting_errors`.
+"""Exception types, `Fix` (the setting that fixes an error), `require` for optional
+dependencies, `warn_caller` and `run_reporting_errors`.
 
 Every message names the input, what is wrong with it and how to fix it. Every exception class
 of exactgrasp is defined here (and exported from `exactgrasp`). This module imports nothing from
 exactgrasp; it must stay at the package root (`warn_caller` skips the frames under its folder).
+
+Errors are data: a message is a sequence of parts, text and `Fix` es (the parameter that fixes
+the error, the value that does and how the sentence uses it). ``str(exc)`` spells each fix as a
+Python argument (``pass repair=True``); a front end that sets the same parameter another way
+(a grasp-file key, a command-line flag) re-spells the same parts with `ExactGraspError.respelled`
+and a function from a `Fix` to its own words. Nothing parses a message's text.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     import argparse
@@ -20,8 +28,158 @@ if TYPE_CHECKING:
 _PACKAGE_DIR = str(Path(__file__).resolve().parent)
 
 
+@dataclass(frozen=True)
+class Fix:
+    """A setting that a message names: the parameter, and the value that fixes the error.
+
+    Parameters
+    ----------
+    parameter : str
+        The Python argument (``"repair"``).
+    value : object
+        The value that fixes the error; ``...`` when the message only names the parameter.
+    form : {"", "pass", "Pass", "is", "where"}
+        How the sentence uses it: ``""`` names it (``repair=True``, or ``joints`` without a
+        value), ``"pass"``/``"Pass"`` asks for it (``pass repair=True``), ``"is"`` states the
+        value in force (``in units='m'``), ``"where"`` says where the setting lives
+        (``takes Solid(..., units=...)``).
+    shown : str, optional
+        The value as Python shows it when not ``repr(value)`` (``"[...]"``; ``""`` for a bare
+        ``workers=``).
+    python : str, optional
+        The whole Python spelling, when it is not ``parameter=value`` (``package_dirs['hand']``).
+    before, after : str
+        Words around the fix that go with it: a front end that has no such setting drops them
+        with it (``", or "`` .. ``" if this size is intended"``).
+    file_key : str, optional
+        The grasp-file key that sets the parameter (dotted when nested), filled in by the
+        grasp-file reader; ``""`` for a Python-only escape hatch that no key reaches.
+    """
+
+    parameter: str
+    value: Any = ...
+    form: str = ""
+    shown: str | None = None
+    python: str | None = None
+    before: str = ""
+    after: str = ""
+    file_key: str | None = None
+
+    def assignment(self) -> str:
+        """``parameter=value`` as Python spells it (the bare name without a value)."""
+        if self.shown is not None:
+            return f"{self.parameter}={self.shown}"
+        return self.parameter if self.value is ... else f"{self.parameter}={self.value!r}"
+
+    def in_python(self) -> str:
+        """The fix as the Python API spells it, without `before` and `after`."""
+        if self.python is not None:
+            return self.python
+        if self.form in ("pass", "Pass"):
+            return f"{self.form} {self.assignment()}"
+        return self.assignment()
+
+    def replace(self, **changes: Any) -> Fix:
+        """A copy with ``changes`` (`dataclasses.replace`)."""
+        return dataclasses.replace(self, **changes)
+
+
+def _in_python(fix: Fix) -> str:
+    return fix.in_python()
+
+
 class ExactGraspError(Exception):
-    """Base class of every error raised on purpose by exactgrasp."""
+    """Base class of every error raised on purpose by exactgrasp.
+
+    Parameters
+    ----------
+    *parts : str or Fix
+        The message: text, and the settings that fix the error (spelled by `spelling`).
+
+    Attributes
+    ----------
+    parts : tuple of (str or Fix)
+    spelling : callable
+        A `Fix` -> its words in the front end that raised the error (None drops it); the
+        Python API's spelling unless `respelled`.
+    """
+
+    def __init__(self, *parts: str | Fix):
+        super().__init__(*parts)
+        self.parts = parts
+        self.spelling: Callable[[Fix], str | None] = _in_python
+
+    def __str__(self) -> str:
+        text = []
+        for part in self.parts:
+            if isinstance(part, Fix):
+                spelled = self.spelling(part)
+                part = "" if spelled is None else f"{part.before}{spelled}{part.after}"
+            text.append(str(part))
+        return "".join(text)
+
+    @property
+    def fixes(self) -> tuple[Fix, ...]:
+        """The settings the message names, in order."""
+        return tuple(p for p in self.parts if isinstance(p, Fix))
+
+    @property
+    def parameter(self) -> str | None:
+        """The parameter of the first fix (None when the message names none)."""
+        return self.fixes[0].parameter if self.fixes else None
+
+    @property
+    def subject(self) -> str | None:
+        """The parameter the message is about, when it starts by naming it (``n_steps must
+        be ...``); None when it starts with text."""
+        first = self.parts[0] if self.parts else None
+        return first.parameter if isinstance(first, Fix) else None
+
+    def prefixed(self, *prefix: str | Fix) -> ExactGraspError:
+        """The same error (class, fields, spelling) with ``prefix`` before its message (``"B: "``);
+        raise it ``from`` this one to keep the chain."""
+        return self.respelled(self.spelling, *prefix)
+
+    def respelled(
+        self,
+        spelling: Callable[[Fix], str | None],
+        *prefix: str | Fix,
+        keys: dict[str, str] | None = None,
+        cls: type[ExactGraspError] | None = None,
+    ) -> ExactGraspError:
+        """The same error for another front end: its fixes in ``spelling``'s words.
+
+        Parameters
+        ----------
+        spelling : callable
+            A `Fix` -> its words (None drops it).
+        *prefix : str or Fix
+            Parts put before the message (``"g.json: object: "``).
+        keys : dict of str to str, optional
+            Parameter -> the grasp-file key that sets it, recorded in each fix's `file_key`.
+        cls : type, optional
+            The class of the new error (default: this one's).
+
+        Returns
+        -------
+        ExactGraspError
+            Of class ``cls`` (or this error's class), with the same fields; raise it ``from``
+            this one to keep the chain.
+        """
+        keys = keys or {}
+        parts = tuple(
+            p.replace(file_key=keys[p.parameter])
+            if isinstance(p, Fix) and p.file_key is None and p.parameter in keys
+            else p
+            for p in (*prefix, *self.parts)
+        )
+        cls = cls or type(self)
+        new = cls.__new__(cls)
+        new.__dict__.update(self.__dict__)
+        Exception.__init__(new, *parts)
+        new.parts = parts
+        new.spelling = spelling
+        return new
 
 
 class MeshError(ExactGraspError, ValueError):
@@ -46,8 +204,14 @@ class UncertainCrossingError(MeshError):
         super().__init__(f"{why} near ({point[0]:.6g}, {point[1]:.6g}, {point[2]:.6g})")
 
 
-class GraspFileError(ExactGraspError, ValueError):
-    """A grasp JSON file is malformed or names files that do not exist."""
+class GraspError(ExactGraspError, ValueError):
+    """A grasp that cannot be: a hand or object of the wrong kind, a pose that is not a rigid
+    transform."""
+
+
+class GraspFileError(GraspError):
+    """A grasp JSON file is malformed, names files that do not exist, or holds a grasp that
+    cannot be."""
 
 
 class JointError(ExactGraspError, ValueError):
@@ -66,13 +230,13 @@ class MissingDependencyError(ExactGraspError, ImportError):
     """An optional dependency needed for the requested feature is not installed."""
 
     def __init__(self, feature: str, package: str, extra: str):
-        self.feature = feature
-        self.package = package
-        self.extra = extra
         super().__init__(
             f"{feature} needs the optional package {package!r}, which is not installed; "
             f'install it with `pip install {package}` or `pip install "exactgrasp[{extra}]"`.'
         )
+        self.feature = feature
+        self.package = package
+        self.extra = extra
 
 
 class FrameError(ExactGraspError, ValueError):

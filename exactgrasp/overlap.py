@@ -3,26 +3,27 @@
 Two meshes in any of the usual forms (trimesh meshes, `Solid`s, (vertices, faces) pairs, mesh
 files) go through the same intake as every `Solid` (units, repair, shells), then through the
 exact backend's `ExactIntersector` (certified error bounds, manifold3d boolean where a sign
-cannot be certified). See ``docs/penetration-volume.md``. Imports `exactgrasp.errors`,
-`exactgrasp.geometry` and `exactgrasp.backends` only.
+cannot be certified). See ``docs/penetration-volume.md``.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import os
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import trimesh
 
+from exactgrasp.backends import defaults
 from exactgrasp.backends.base import check_poses
 from exactgrasp.backends.exact import ExactIntersector
-from exactgrasp.errors import BackendError, MeshError
+from exactgrasp.errors import BackendError, Fix, MeshError
 from exactgrasp.geometry.intake import UNITS, unit_scale
 from exactgrasp.geometry.solid import Solid
 
-__all__ = ["as_solid", "intersection_volume"]
+__all__ = ["Overlap", "as_solid", "intersection", "intersection_volume"]
 
 #: What `as_solid` takes, for messages.
 ACCEPTED = (
@@ -30,10 +31,6 @@ ACCEPTED = (
     "path of a mesh file (STL, OBJ, PLY, OFF, GLB)"
 )
 BROADPHASES = ("auto", "coal", "fcl", None)
-#: ``broadphase="auto"`` builds coal's BVH for stacks of more poses than this: building it
-#: costs about what the kernel spends on a few hundred poses, and it only saves the kernel's
-#: time on poses whose surfaces are apart.
-AUTO_BVH_POSES = 256
 UNIT_NAMES = sorted(set(UNITS) - {"in"})
 
 
@@ -88,7 +85,7 @@ def as_solid(
         try:
             return Solid.from_file(mesh, **options)
         except MeshError as exc:
-            raise MeshError(f"{name}: {exc}") from exc
+            raise exc.prefixed(f"{name}: ") from exc
     if isinstance(mesh, tuple | list) and len(mesh) == 2:
         vertices, faces = _arrays(mesh, name)
         return Solid(vertices, faces, name=name, **options)
@@ -118,22 +115,23 @@ def _units_pair(units: Any) -> tuple[str, str]:
         or not all(isinstance(u, str) and u in UNITS for u in pair)
     ):
         raise MeshError(
-            f"units={units!r}; use one of {UNIT_NAMES} for both meshes, or a pair "
-            "(units of a, units of b) such as ('m', 'mm')."
+            Fix("units", units),
+            f"; use one of {UNIT_NAMES} for both meshes, or a pair "
+            "(units of a, units of b) such as ('m', 'mm').",
         )
     return pair[0], pair[1]
 
 
 def _broadphase(broadphase: Any, n_poses: int) -> str | None:
     """The broad phase to build with: ``"auto"`` is coal where it is installed and the stack
-    holds more than `AUTO_BVH_POSES` poses, else None."""
+    holds more than `defaults.OVERLAP_AUTO_BVH_POSES` poses, else None."""
     if broadphase not in BROADPHASES:
         raise BackendError(
             f"broadphase={broadphase!r}; use 'auto', 'coal', 'fcl' or None (results do not "
             "depend on it)."
         )
     if broadphase == "auto":
-        many = n_poses > AUTO_BVH_POSES
+        many = n_poses > defaults.OVERLAP_AUTO_BVH_POSES
         return "coal" if many and importlib.util.find_spec("coal") is not None else None
     return broadphase
 
@@ -153,7 +151,46 @@ def _check_backend(backend: Any) -> None:
     )
 
 
+@dataclass(frozen=True)
+class Overlap:
+    """What `intersection` found: the volumes of a ∩ moved b and their certified bounds.
+
+    Attributes
+    ----------
+    volumes : float or numpy.ndarray
+        m^3: a float for a single pose, else an array of shape ``poses.shape[:-2]``.
+    bounds : float or numpy.ndarray
+        Alike in shape: ``|volume - true volume| <= bound`` (m^3).
+    """
+
+    volumes: Any
+    bounds: Any
+
+
 def intersection_volume(
+    a: Any, b: Any, poses: Any = None, backend: str = "exact", **options: Any
+) -> Any:
+    """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3: `intersection`'s
+    volumes alone.
+
+    Parameters
+    ----------
+    a, b, poses, backend
+        As `intersection`.
+    **options
+        `intersection`'s keyword options (``units``, ``repair``, ``check_scale``,
+        ``broadphase``, ``n_jobs``).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        m^3: a float when ``poses`` is None or one (4, 4) pose, else an array of shape
+        ``poses.shape[:-2]``.
+    """
+    return intersection(a, b, poses, backend, **options).volumes
+
+
+def intersection(
     a: Any,
     b: Any,
     poses: Any = None,
@@ -162,11 +199,10 @@ def intersection_volume(
     units: str | tuple[str, str] = "m",
     repair: bool = False,
     check_scale: bool = True,
-    return_bounds: bool = False,
-    broadphase: str | None = "auto",
-    n_jobs: int = 1,
-) -> Any:
-    """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3.
+    broadphase: str | None = defaults.OVERLAP_BROADPHASE,
+    n_jobs: int = defaults.OVERLAP_N_JOBS,
+) -> Overlap:
+    """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3, with its bound.
 
     Both meshes are read as `Solid`s (metres; any closed surface read as the solid of winding
     number >= 1 it bounds, with a warning when it had to be resolved; open surfaces refused)
@@ -191,21 +227,20 @@ def intersection_volume(
         Let trimesh and pymeshfix close and orient both meshes, with a warning.
     check_scale : bool
         Refuse a mesh longer than 5 m after the unit conversion (see `Solid`).
-    return_bounds : bool
-        Also return each volume's certified error bound (m^3).
     broadphase : {"auto", "coal", "fcl", None}
-        Library that skips poses whose surfaces are apart; ``"auto"``: coal where installed,
-        for stacks of more than `AUTO_BVH_POSES` poses (its BVH takes longer to build than
-        it saves on fewer). The volumes do not depend on it.
+        Library that skips poses whose surfaces are apart; ``"auto"`` (default): coal where
+        installed, for stacks of more than `defaults.OVERLAP_AUTO_BVH_POSES` poses (its BVH
+        takes longer to build than it saves on fewer). The volumes do not depend on it.
     n_jobs : int
-        Threads over poses (-1: every core). The volumes do not depend on it.
+        Threads over poses (-1: every core; default `defaults.OVERLAP_N_JOBS`). The volumes
+        do not depend on it.
 
     Returns
     -------
-    float or numpy.ndarray
-        m^3: a float when ``poses`` is None or one (4, 4) pose, else an array of shape
-        ``poses.shape[:-2]``. With ``return_bounds``, the pair (volumes, bounds), alike in
-        shape: ``|volume - true volume| <= bound``.
+    Overlap
+        ``volumes`` in m^3: a float when ``poses`` is None or one (4, 4) pose, else an array
+        of shape ``poses.shape[:-2]``; ``bounds``, alike in shape:
+        ``|volume - true volume| <= bound``.
 
     Raises
     ------
@@ -228,12 +263,12 @@ def intersection_volume(
     B = as_solid(b, "b", units=units_b, repair=bool(repair), check_scale=check_scale)
     if arr.size == 0:
         empty = np.zeros(arr.shape[:-2])
-        return (empty, empty.copy()) if return_bounds else empty
+        return Overlap(empty, empty.copy())
     intersector = ExactIntersector(
         [(A.vertices, A.faces)], [(B.vertices, B.faces)], broadphase=library, n_jobs=n_jobs
     )
-    volumes = intersector.volumes(arr)
-    bounds = intersector.volume_bounds
+    result = intersector.intersect(arr)
+    volumes, bounds = result.volumes, result.volume_bounds
     if single:
         volumes, bounds = float(volumes), float(bounds)
-    return (volumes, bounds) if return_bounds else volumes
+    return Overlap(volumes, bounds)

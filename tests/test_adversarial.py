@@ -30,7 +30,7 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, HalfspaceIntersection
 from scipy.spatial.transform import Rotation
 
-from exactgrasp.backends.exact import ExactIntersector, plain_error
+from exactgrasp.backends.exact import ExactIntersector, Intersection, plain_error
 
 # ---------------------------------------------------------------------------------------------
 # Meshes
@@ -755,11 +755,13 @@ def halfspace_volumes(scene: Scene) -> tuple[np.ndarray, float]:
 # ---------------------------------------------------------------------------------------------
 
 
-def run_exact(scene: Scene, broadphase="coal", n_jobs=1) -> tuple[np.ndarray, ExactIntersector]:
+def run_exact(scene: Scene, broadphase="coal", n_jobs=1) -> tuple[np.ndarray, Intersection]:
+    """The exact volumes of a scene's poses, and the whole result (bounds, sources, stats)."""
     ex = ExactIntersector(
         scene.hand_meshes(), scene.object_meshes(), broadphase=broadphase, n_jobs=n_jobs
     )
-    return ex.volumes(scene.poses), ex
+    result = ex.intersect(scene.poses)
+    return result.volumes, result
 
 
 def reference(scene: Scene) -> tuple[np.ndarray, float]:
@@ -800,7 +802,7 @@ def reference_error(scene: Scene, want: np.ndarray, exact: bool) -> np.ndarray:
 
 def mismatches(scene, got, want, bounds, exact):
     """Poses where `got` is farther from the reference `want` than the backend's own error
-    bound (`ExactIntersector.volume_bounds`) plus the reference's error."""
+    bound (`Intersection.volume_bounds`) plus the reference's error."""
     allowed = bounds + reference_error(scene, want, exact)
     bad = ~(np.abs(got - want) <= allowed)
     return [

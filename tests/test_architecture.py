@@ -259,3 +259,196 @@ def test_project_speaks_of_itself(path):
         for m in WORDS.finditer(text)
     ]
     assert not hits, "words about how the project is run, not what it is: " + "; ".join(hits)
+
+
+# -- errors are data ------------------------------------------------------------------------
+
+#: The one adapter that reads a third-party library's message: MuJoCo says which mesh file it
+#: could not open only in its text.
+MESSAGE_ADAPTERS = {"exactgrasp.hands.loading"}
+
+
+def _caught_text(node: ast.AST, caught: set[str]) -> bool:
+    """``str(exc)`` or ``exc.args`` of an exception bound by an enclosing ``except``."""
+    if isinstance(node, ast.Call) and ast.unparse(node.func) == "str" and len(node.args) == 1:
+        return isinstance(node.args[0], ast.Name) and node.args[0].id in caught
+    return (
+        isinstance(node, ast.Attribute)
+        and node.attr == "args"
+        and isinstance(node.value, ast.Name)
+        and node.value.id in caught
+    )
+
+
+def message_readers(tree: ast.AST) -> list[str]:
+    """Places that read a caught exception's text rather than pass it on whole: a method called
+    on it (``str(exc).replace``), an index into it, a comparison, or a call that takes it (other
+    than printing, warning or logging it)."""
+    parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
+    found = []
+    for handler in (n for n in ast.walk(tree) if isinstance(n, ast.ExceptHandler)):
+        if not handler.name:
+            continue
+        for node in ast.walk(handler):
+            if not _caught_text(node, {handler.name}):
+                continue
+            parent = parents[node]
+            whole = isinstance(parent, ast.FormattedValue | ast.Return | ast.keyword | ast.Dict)
+            if isinstance(parent, ast.Call) and node in parent.args:
+                whole = ast.unparse(parent.func).split(".")[-1] in {"print", "warn", "log"}
+            if isinstance(parent, ast.BoolOp):  # str(exc) or repr(exc): still whole
+                whole = isinstance(parents[parent], ast.keyword | ast.Dict | ast.Return)
+            if not whole:
+                found.append(f"line {node.lineno}: {ast.unparse(parent)[:80]}")
+    return found
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_no_exception_text_is_parsed(module):
+    """Errors carry their fields (`exactgrasp.errors.Fix`); front ends spell those, never an
+    exception's text. Only the adapter of a library that says something in its text alone may
+    read it."""
+    found = message_readers(ast.parse(MODULES[module].read_text()))
+    if module in MESSAGE_ADAPTERS:
+        assert found, f"{module} no longer reads a message: take it off MESSAGE_ADAPTERS"
+    else:
+        assert not found, f"{module} reads an exception's text: {found}"
+
+
+def test_the_message_rule_catches_rewriting():
+    bad = [
+        "try:\n    f()\nexcept E as exc:\n    raise E(str(exc).replace('a', 'b'))",
+        "try:\n    f()\nexcept E as exc:\n    m = re.sub('a', 'b', str(exc))",
+        "try:\n    f()\nexcept E as exc:\n    if str(exc).startswith('x'):\n        pass",
+        "try:\n    f()\nexcept KeyError as exc:\n    k = exc.args[0]",
+        "try:\n    f()\nexcept E as exc:\n    m = translate(str(exc), TABLE)",
+    ]
+    good = [
+        "try:\n    f()\nexcept E as exc:\n    raise E(f'bad JSON ({exc})') from exc",
+        "try:\n    f()\nexcept E as exc:\n    r.update(message=str(exc) or repr(exc))",
+        "try:\n    f()\nexcept E as exc:\n    return {'reason': str(exc)}",
+        "try:\n    f()\nexcept E as exc:\n    raise exc.prefixed('A: ') from exc",
+    ]
+    assert all(message_readers(ast.parse(code)) for code in bad)
+    assert not any(message_readers(ast.parse(code)) for code in good)
+
+
+# -- results are returned -------------------------------------------------------------------
+
+
+def state_writes(tree: ast.AST) -> list[str]:
+    """``self.x = ...`` in a method other than ``__init__``, outside a ``with`` block: state a
+    call leaves behind. A value built once and shared (a cache) is built under a lock."""
+    parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
+    found = []
+    for cls in (n for n in ast.walk(tree) if isinstance(n, ast.ClassDef)):
+        for method in cls.body:
+            if not isinstance(method, ast.FunctionDef) or method.name == "__init__":
+                continue
+            for node in ast.walk(method):
+                targets = (
+                    node.targets
+                    if isinstance(node, ast.Assign)
+                    else [node.target]
+                    if isinstance(node, ast.AugAssign | ast.AnnAssign)
+                    else []
+                )
+                for target in targets:
+                    if not (
+                        isinstance(target, ast.Attribute)
+                        and isinstance(target.value, ast.Name)
+                        and target.value.id == "self"
+                    ):
+                        continue
+                    up = parents[node]
+                    while up is not method and not isinstance(up, ast.With):
+                        up = parents[up]
+                    if up is method:
+                        found.append(f"{cls.name}.{method.name}: {ast.unparse(target)}")
+    return found
+
+
+@pytest.mark.parametrize("module", sorted(m for m in MODULES if room(m) == "backends"))
+def test_no_backend_keeps_results_as_attributes(module):
+    """A backend or intersector returns what a call computed (`ExactIntersector.intersect`
+    returns an `Intersection`); it keeps nothing of the last call, which would describe
+    another call after the next one and race between threads."""
+    found = state_writes(ast.parse(MODULES[module].read_text()))
+    assert not found, f"{module} keeps results of a call on the object: {found}"
+
+
+def test_the_state_rule_catches_last_call_results():
+    code = "class A:\n    def __init__(self):\n        self.a = 1\n    def f(self):\n        {}"
+    assert state_writes(ast.parse(code.format("self.stats = {}")))
+    assert state_writes(ast.parse(code.format("self.n += 1")))
+    assert not state_writes(ast.parse(code.format("with self.lock:\n            self.c = 2")))
+    assert not state_writes(ast.parse(code.format("x = self.a")))
+
+
+# -- declared parameters ------------------------------------------------------------------
+
+
+def invalid_values(param) -> list:
+    """Values no constraint of ``param`` admits, generated from its constraints (as
+    scikit-learn's ``check_param_validation`` does): just past each bound, the wrong kind of
+    number, NaN, a bool, text, None and an object no option lists."""
+    from exactgrasp.backends.params import Interval
+
+    candidates = [object(), "not-an-option", float("nan"), float("inf"), True, None, [1], 0.5]
+    for constraint in param.allowed:
+        if isinstance(constraint, Interval):
+            step = 1 if constraint.kind.__name__ == "Integral" else 1e-9
+            for bound, past in ((constraint.lo, -step), (constraint.hi, step)):
+                if bound is not None:
+                    candidates += [bound + past, bound, float(bound) + 0.5 * past]
+    return [v for v in candidates if param.admits(v) is NotImplemented]
+
+
+def backend_classes() -> dict:
+    from exactgrasp.backends import registry
+
+    return {name: registry.backend_class(name) for name in registry.available_backends()}
+
+
+@pytest.mark.parametrize("name", sorted(backend_classes()))
+def test_declared_constraints_match_the_constructor(name):
+    import inspect
+
+    cls = backend_classes()[name]
+    signature = inspect.signature(cls.__init__).parameters
+    kinds = {p.kind for p in signature.values()}
+    assert inspect.Parameter.VAR_KEYWORD not in kinds, f"{name} hides options in **kwargs"
+    assert list(signature)[1:] == list(cls.parameter_constraints), (
+        f"{name}: the constructor takes {list(signature)[1:]}, the constraints declare "
+        f"{list(cls.parameter_constraints)}"
+    )
+    for key, param in cls.parameter_constraints.items():
+        default = signature[key].default
+        assert param.admits(default) is not NotImplemented, f"{name}.{key}: default refused"
+
+
+@pytest.mark.parametrize("name", sorted(backend_classes()))
+def test_invalid_values_generated_from_the_constraints_are_refused(name):
+    from exactgrasp.errors import BackendError
+
+    cls = backend_classes()[name]
+    tried = 0
+    for key, param in cls.parameter_constraints.items():
+        for value in invalid_values(param):
+            with pytest.raises(BackendError, match=rf"{key} must be"):
+                cls(**{key: value})
+            tried += 1
+    assert tried >= 5 * len(cls.parameter_constraints)
+
+
+#: A docstring sentence listing a module's imports ("Imports `x` and numpy.", "May import: ...").
+IMPORT_LIST = re.compile(r"(^|\s)(May import:|Imports:?\s+(`|numpy|numba|only|the\b))")
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_docstrings_do_not_list_imports_by_hand(module):
+    """What a module may import is the layers' rule, checked above from the source; a list
+    written by hand in a docstring goes stale unchecked."""
+    docstring = ast.get_docstring(ast.parse(MODULES[module].read_text())) or ""
+    match = IMPORT_LIST.search(docstring)
+    assert not match, f"{module}'s docstring lists its imports: {match.group(0).strip()} ..."

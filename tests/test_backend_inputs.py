@@ -46,10 +46,11 @@ def test_two_cube_object_one_inside_one_far_gives_the_inner_cube_under_every_bro
     results = {}
     for broadphase in BROADPHASES:
         ex = ExactIntersector(hand, obj, broadphase=broadphase)
-        results[broadphase] = ex.volumes(poses)
+        result = ex.intersect(poses)
+        results[broadphase] = result.volumes
         if broadphase is not None:
             # Only the pose with both cubes away from the hand is culled.
-            assert ex.stats["poses_culled"] == 1
+            assert result.stats["poses_culled"] == 1
     np.testing.assert_allclose(results[None], [0.008, 0.008, 0.0], rtol=1e-12, atol=0)
     assert results[None][2] == 0.0
     for broadphase in ("coal", "fcl"):
@@ -136,7 +137,6 @@ BAD_OPTIONS = [
     ({"n_jobs": 0}, "n_jobs must be a positive integer, -1 or None, got 0"),
     ({"n_jobs": True}, "n_jobs must be a positive integer, -1 or None, got True"),
     ({"broadphase": "bullet"}, "broadphase must be 'coal', 'fcl' or None, got 'bullet'"),
-    ({"cell": 0.1}, r"unknown parameters \['cell'\]; it takes broadphase, n_jobs, hand_cell"),
 ]
 
 
@@ -148,6 +148,16 @@ def test_exact_options_are_refused_in_both_constructors_with_the_option_named(op
     hand = [box_arrays([0, 0, 0], [1, 1, 1])]
     with pytest.raises(BackendError, match=message):
         ExactIntersector(hand, hand, **options)
+
+
+def test_an_unknown_exact_option_is_refused_naming_it():
+    # The backend's options are its constructor's arguments: Python refuses an unknown one.
+    with pytest.raises(TypeError, match="'cell'"):
+        ExactBackend(broadphase=None, cell=0.1)
+    hand = [box_arrays([0, 0, 0], [1, 1, 1])]
+    unknown = r"unknown parameters \['cell'\]; it takes broadphase, n_jobs, hand_cell"
+    with pytest.raises(BackendError, match=unknown):
+        ExactIntersector(hand, hand, broadphase=None, cell=0.1)
 
 
 def test_a_cell_option_that_would_lay_a_huge_grid_is_refused_with_the_smallest_allowed():
@@ -167,7 +177,9 @@ def test_explicit_cells_are_used_and_recorded():
 def test_checked_options_become_plain_numbers_in_params():
     be = ExactBackend(broadphase=None, n_jobs=np.int64(2), capacity=np.int64(10), hand_cell=1)
     assert be.params == {"broadphase": None, "n_jobs": 2, "capacity": 10, "hand_cell": 1.0}
-    assert [type(v) for v in be.params.values()] == [type(None), int, int, float]
+    # in the constructor's order, whatever order they were given in
+    assert list(be.params) == ["broadphase", "n_jobs", "hand_cell", "capacity"]
+    assert [type(v) for v in be.params.values()] == [type(None), int, float, int]
     assert ExactBackend(broadphase=None, object_cell=None).params == {
         "broadphase": None,
         "n_jobs": None,

@@ -513,3 +513,31 @@ def test_docs_cover_every_command_and_flag():
         missing = [f for f in _flags(parser) if f"`{f}" not in sections[name]]
         assert not missing, f"docs/cli.md, exactgrasp {name}: flags not described {missing}"
         assert f"exactgrasp {name}" in sections[name], f"no example of exactgrasp {name}"
+
+
+def test_fixes_are_spelled_as_flags_from_their_fields():
+    from exactgrasp.cli.common import GRASP_TERMS
+    from exactgrasp.errors import Fix, MeshError
+
+    def via_file(fix, key):
+        return fix.replace(file_key=key)
+
+    # a grasp-file key a flag overrides: the flag, then the key
+    assert GRASP_TERMS(via_file(Fix("units", "mm", "pass"), "object_units")) == (
+        'pass --units mm (or set "object_units": "mm" in the grasp file)'
+    )
+    assert GRASP_TERMS(via_file(Fix("units", form="where"), "object_units")) == (
+        '--units (or "object_units" in the grasp file)'
+    )
+    assert GRASP_TERMS(via_file(Fix("units", "m", "is"), "object_units")) == "units m"
+    # a key no flag overrides keeps the file's words; a Python-only setting is dropped
+    assert GRASP_TERMS(via_file(Fix("repair", True, "pass"), "hand.repair")) == (
+        'set "hand": {"repair": true} in the grasp file'
+    )
+    assert GRASP_TERMS(via_file(Fix("check_scale", False, "pass"), "")) is None
+    # a Python argument: its flag, or the Python spelling when no flag sets that value
+    assert GRASP_TERMS(Fix("repair", True, "Pass")) == "Pass --repair"
+    assert GRASP_TERMS(Fix("units", "km")) == "units='km'"
+    # the whole message, the same parts in the command's words
+    error = MeshError("m: ", Fix("repair", True, "pass"), " to close it")
+    assert str(error.respelled(GRASP_TERMS, "A: ")) == "A: m: pass --repair to close it"

@@ -225,7 +225,7 @@ def test_bad_hand_object_and_pose(cylinder_grasp):
         close_fingers(rigid, obj, pose)
     with pytest.raises(ClosingError, match=r"object must be an exactgrasp Solid, got Trimesh"):
         close_fingers(hand, obj.to_trimesh(), pose)
-    with pytest.raises(eg.GraspFileError, match=r"must be a 4x4 matrix"):
+    with pytest.raises(eg.GraspError, match=r"must be a 4x4 matrix"):
         close_fingers(hand, obj, pose[:3])
     no_palm = eg.hands.barrett(frame=eg.HandFrame.identity())
     assert close_fingers(no_palm, obj, pose).joints  # the model's palm still gives the normal

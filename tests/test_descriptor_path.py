@@ -105,18 +105,17 @@ def test_n_jobs_none_is_every_core_and_a_thread_limit_pins_it(monkeypatch):
     P = translations(*[[0.1 * k, 0, 0] for k in range(8)])
     assert defaults.EXACT_N_JOBS is None and ExactBackend().n_jobs is None
     ex = ExactIntersector(hand, hand, broadphase=None)
-    base = ex.volumes(P)
-    assert ex.stats["threads"] == 3 == default_threads()
+    base = ex.intersect(P)
+    assert base.stats["threads"] == 3 == default_threads()
     with thread_limit(1):
         assert default_threads() == 1
-        np.testing.assert_array_equal(ex.volumes(P), base)
-        assert ex.stats["threads"] == 1
+        limited = ex.intersect(P)
+        np.testing.assert_array_equal(limited.volumes, base.volumes)
+        assert limited.stats["threads"] == 1
         # An explicit number, or -1 (every core), is not the limit's to change.
         every_core = ExactIntersector(hand, hand, broadphase=None, n_jobs=-1)
-        every_core.volumes(P)
-        assert every_core.stats["threads"] == 3
-    ex.volumes(P)
-    assert ex.stats["threads"] == 3
+        assert every_core.intersect(P).stats["threads"] == 3
+    assert ex.intersect(P).stats["threads"] == 3
 
 
 @pytest.mark.parametrize(("single_thread", "threads"), [(True, 1), (False, 3)])
@@ -147,16 +146,15 @@ def test_the_bvh_is_built_only_with_a_broad_phase_and_enough_open_poses():
     for bp in (None, "coal"):
         ex = ExactIntersector(hand, obj, broadphase=bp)
         assert ex.cull is None  # nothing is built before a call
-        ex.volumes(np.concatenate([inside, far]))
-        assert ex.cull is None and ex.stats["poses_culled"] == 0
+        result = ex.intersect(np.concatenate([inside, far]))
+        assert ex.cull is None and result.stats["poses_culled"] == 0
     triangles = len(ex.hand_mesh.faces) + len(ex.object_mesh.faces)
     assert len(many_far) * defaults.EXACT_CULL_TRIANGLES_PER_POSE >= triangles
-    got = ex.volumes(many_far)
-    assert ex.cull is not None and ex.stats["poses_culled"] == len(many_far)
-    assert (got == 0).all()
+    result = ex.intersect(many_far)
+    assert ex.cull is not None and result.stats["poses_culled"] == len(many_far)
+    assert (result.volumes == 0).all()
     # Once built it serves every later call, and culling never changes a bit of a result.
-    ex.volumes(far)
-    assert ex.stats["poses_culled"] == 2
+    assert ex.intersect(far).stats["poses_culled"] == 2
     plain = ExactIntersector(hand, obj, broadphase=None)
     P = np.concatenate([inside, far, many_far])
     np.testing.assert_array_equal(ex.volumes(P), plain.volumes(P))

@@ -18,6 +18,7 @@ from exactgrasp.backends.exact import (
     plain_volumes,
     repeated_poses,
 )
+from exactgrasp.backends.registry import get_backend
 from exactgrasp.datapath import data_dir
 from exactgrasp.errors import BackendError, MeshError, MissingDependencyError
 
@@ -110,8 +111,9 @@ def test_coincident_faces_fall_back_to_the_boolean():
     )
     P = np.tile(np.eye(4), (2, 1, 1))
     P[1, :3, 3] = [0.5, 0, 0]
-    assert np.allclose(ex.volumes(P), [1.0, 0.5], rtol=1e-12, atol=0)
-    assert ex.stats["poses_boolean"] == 2
+    result = ex.intersect(P)
+    assert np.allclose(result.volumes, [1.0, 0.5], rtol=1e-12, atol=0)
+    assert result.stats["poses_boolean"] == 2
 
 
 def test_pose_sources_and_bounds_say_where_each_volume_came_from():
@@ -122,15 +124,19 @@ def test_pose_sources_and_bounds_say_where_each_volume_came_from():
     P[1, :3, 3] = [0.5, 0.5, 5.0]  # far away: culled, exactly 0
     # At the corner, where the sphere's vertices lie on the box's face planes: the boolean.
     ex = ExactIntersector(hand, obj, broadphase="coal")
-    got = ex.volumes(P)
+    result = ex.intersect(P)
+    got, bounds = result.volumes, result.volume_bounds
     ex2 = ExactIntersector(hand, [box([0, 0, 0], [1, 1, 1])], broadphase=None)
-    ex2.volumes(np.eye(4))  # coincident faces: the boolean
-    assert list(ex.pose_sources) == ["kernel", "culled", "boolean"]
-    assert got[1] == 0.0 and ex.volume_bounds[1] == 0.0
-    assert 0 < ex.volume_bounds[0] < 1e-12 * got[0]
-    assert ex.volume_bounds[2] > ex.volume_bounds[0]
+    one = ex2.intersect(np.eye(4))  # coincident faces: the boolean
+    assert list(result.pose_sources) == ["kernel", "culled", "boolean"]
+    assert got[1] == 0.0 and bounds[1] == 0.0
+    assert 0 < bounds[0] < 1e-12 * got[0]
+    assert bounds[2] > bounds[0]
     np.testing.assert_allclose(got[2], got[0] / 8, rtol=1e-9)  # an eighth of the sphere
-    assert ex2.pose_sources.tolist() == "boolean" and ex2.volume_bounds > 0
+    assert one.pose_sources.tolist() == "boolean" and one.volume_bounds > 0
+    # Each call returns its own result; the intersector keeps none of them.
+    assert result.pose_sources.shape == (3,) and ex.intersect(P[:1]).pose_sources.shape == (1,)
+    assert not {"stats", "pose_sources", "volume_bounds"} & set(vars(ex))
 
 
 def test_a_full_crossing_buffer_falls_back_to_the_boolean():
@@ -141,13 +147,15 @@ def test_a_full_crossing_buffer_falls_back_to_the_boolean():
     P = np.eye(4)
     P[:3, 3] = [0.9, 0.5, 0.5]  # the sphere crosses the hand's face x = 1
     small = ExactIntersector(hand, obj, broadphase=None, capacity=1)
-    got = small.volumes(P[None])
-    assert small.stats["poses_boolean"] == 1 and small.pose_sources.tolist() == ["boolean"]
+    result = small.intersect(P[None])
+    got = result.volumes
+    assert result.stats["poses_boolean"] == 1 and result.pose_sources.tolist() == ["boolean"]
     want = plain_volumes(hand, obj, P[None])
     np.testing.assert_allclose(got, want, rtol=1e-9)
     full = ExactIntersector(hand, obj, broadphase=None)
-    np.testing.assert_allclose(full.volumes(P[None]), want, rtol=1e-9)
-    assert full.stats["poses_boolean"] == 0
+    result = full.intersect(P[None])
+    np.testing.assert_allclose(result.volumes, want, rtol=1e-9)
+    assert result.stats["poses_boolean"] == 0
 
 
 def test_edges_passing_near_each_other_match_the_boolean():
@@ -177,8 +185,9 @@ def test_random_convex_polytopes_match_halfspace_intersection():
         B = hull(rng.normal(size=(30, 3)) * [1.5, 0.7, 1.0])
         ex = ExactIntersector([A], [B], broadphase=None)
         P = rigid(rng, 4, tmax=1.5)
-        got = ex.volumes(P)
-        assert ex.stats["poses_boolean"] == 0  # the certified fast path decided every pose
+        result = ex.intersect(P)
+        got = result.volumes
+        assert result.stats["poses_boolean"] == 0  # the certified fast path decided every pose
         for v, p in zip(got, P, strict=True):
             want = halfspace_volume(A[0], moved(B[0], p))
             assert abs(v - want) <= 1e-9 * max(want, 1e-6 * ex.hand_volume)
@@ -232,9 +241,9 @@ def test_no_overlap_gives_exactly_zero():
     P[:, :3, 3] = [[10.0, 0, 0], [0, 0.0, 6.0]]
     for bp in (None, "coal", "fcl"):
         ex = ExactIntersector(links, objs, broadphase=bp)
-        got = ex.volumes(P)
-        assert got.tolist() == [0.0, 0.0]
-    assert ex.stats["poses_culled"] == 2
+        result = ex.intersect(P)
+        assert result.volumes.tolist() == [0.0, 0.0]
+    assert result.stats["poses_culled"] == 2
 
 
 def test_culling_off_coal_fcl_and_n_jobs_give_identical_volumes():
@@ -271,9 +280,10 @@ def test_poses_equal_to_rounding_are_computed_once():
     assert repeated_poses(poses).tolist()[4:] == [0, 0, 6]
     assert repeated_poses(poses)[3] in (2, 3)
     ex = ExactIntersector(links, objs, broadphase=None)
-    got = ex.volumes(poses)
-    assert ex.stats["poses"] == 7
-    assert ex.stats["poses_repeated"] == 2 + (repeated_poses(poses)[3] == 2)
+    result = ex.intersect(poses)
+    got = result.volumes
+    assert result.stats["poses"] == 7
+    assert result.stats["poses_repeated"] == 2 + (repeated_poses(poses)[3] == 2)
     alone = np.array([ex.volumes(p[None])[0] for p in poses])
     assert agrees(got, alone, ex.hand_volume, rtol=1e-12).all()
     assert got[4] == got[0] and got[5] == got[0]
@@ -309,9 +319,9 @@ def test_overlaps_thinner_than_the_bound_read_zero_and_the_rest_agree():
     hand, obj, pose, volume = corner_dip()
     ex = ExactIntersector(hand, obj, broadphase=None)
     depths = 10.0 ** -np.arange(1.0, 7.5, 0.25)
-    got = ex.volumes(np.stack([pose(d) for d in depths]))
-    bound, want = ex.volume_bounds, volume(depths)
-    assert (ex.pose_sources == "kernel").all()
+    result = ex.intersect(np.stack([pose(d) for d in depths]))
+    got, bound, want = result.volumes, result.volume_bounds, volume(depths)
+    assert (result.pose_sources == "kernel").all()
     assert (got >= 0).all() and (np.abs(got - want) <= bound + 1e-14 * want).all()
     zero = got == 0
     # Both kinds occur: overlaps above the bound agree to the rule of `agrees`, those within
@@ -344,9 +354,9 @@ def test_poses_equal_to_rounding_take_the_volume_of_the_first_within_its_bound()
     assert alone > 0
     first_a = ex.volumes(np.stack([a, b]))
     assert first_a.tolist() == [0.0, 0.0]
-    first_b = ex.volumes(np.stack([b, a]))
+    result = ex.intersect(np.stack([b, a]))
+    first_b, bounds = result.volumes, result.volume_bounds
     assert first_b.tolist() == [alone, alone]
-    bounds = ex.volume_bounds
     for d, v, e in zip((kept_at, zero_at), first_b, bounds, strict=True):
         assert abs(v - volume(d)) <= e
 
@@ -386,8 +396,12 @@ def test_backend_validates_parameters(monkeypatch):
         ExactBackend(broadphase="bullet")
     with pytest.raises(BackendError, match="n_jobs"):
         ExactBackend(n_jobs=0)
-    with pytest.raises(BackendError, match=r"unknown parameters \[.voxel.\]"):
+    # Its options are the constructor's arguments: an unknown one is Python's TypeError, and
+    # through the registry a BackendError naming it.
+    with pytest.raises(TypeError, match="voxel"):
         ExactBackend(voxel=3)
+    with pytest.raises(BackendError, match=r"bad parameters \['voxel'\]"):
+        get_backend("exact", voxel=3)
     import sys
 
     monkeypatch.setitem(sys.modules, "coal", None)  # makes `import coal` fail
@@ -434,14 +448,15 @@ def test_real_spray_bottle_grasp_matches_plain_boolean():
     poses = PathSampler.preset("balanced").poses().reshape(-1, 4, 4)
     P = np.concatenate([np.eye(4)[None], poses[[5, 1000, 2500, 4000]]])
     ex = ExactIntersector(links, objs, broadphase="coal")
-    got = ex.volumes(P)
+    result = ex.intersect(P)
+    got = result.volumes
     ref = plain_volumes(links, objs, P)
     # The grasp itself penetrates by about 1e-6 of the hand; the path poses overlap deeply.
     assert 0 < got[0] < 1e-5 * ex.hand_volume
     assert (got[1:] > 1e-3 * ex.hand_volume).all()
     assert agrees(got, ref, ex.hand_volume).all()
-    assert ex.stats["poses_boolean"] == 0
-    assert json.dumps(ex.stats)  # serialisable, for the benchmark
+    assert result.stats["poses_boolean"] == 0
+    assert json.dumps(result.stats)  # serialisable, for the benchmark
 
 
 def test_ray_status_agrees_with_winding_number():
@@ -485,10 +500,11 @@ def test_small_shell_inside_object_surface_cells_matches_plain_boolean():
     assert status == [-1] * 8
     P = np.tile(np.eye(4), (4, 1, 1))
     P[:, 0, 3] = [0.0, -0.004, 0.006, -0.35]
-    got = ex.volumes(P)
+    result = ex.intersect(P)
+    got = result.volumes
     ref = plain_volumes([big, tiny], [obj], P)
     assert agrees(got, ref, ex.hand_volume).all()
-    assert ex.stats["poses_boolean"] == 0
+    assert result.stats["poses_boolean"] == 0
     # Wholly inside the sphere at the first two poses, partly at the third.
     assert got[0] == pytest.approx(1e-6, rel=1e-9)
     assert got[1] == pytest.approx(1e-6, rel=1e-9)
@@ -510,8 +526,9 @@ def test_surfaces_cross_is_certain_and_keeps_culling_unchanged():
         *ex.shells[1], ex.object_grid,
     )  # fmt: skip
     assert crossing.tolist() == [True, False, True]
-    got = ex.volumes(P)
-    assert got[1] == 0.0 and ex.stats["poses_culled"] == 1
+    result = ex.intersect(P)
+    got = result.volumes
+    assert got[1] == 0.0 and result.stats["poses_culled"] == 1
     np.testing.assert_array_equal(got, ExactIntersector(links, objs, broadphase=None).volumes(P))
 
 
@@ -537,12 +554,12 @@ def test_cells_classified_whole_match_analytic_overlap():
     ex = ExactIntersector([hand], [box(obj_lo, obj_hi)], broadphase=None)
     shifts = np.tile(np.eye(4), (4, 1, 1))
     shifts[:, :3, 3] = rng.uniform(-0.4, 0.4, (4, 3))
-    got = ex.volumes(shifts)
-    for v, t in zip(got, shifts[:, :3, 3], strict=True):
+    result = ex.intersect(shifts)
+    for v, t in zip(result.volumes, shifts[:, :3, 3], strict=True):
         overlap = np.minimum(1.0, obj_hi + t) - np.maximum(-1.0, obj_lo + t)
         want = np.prod(np.clip(overlap, 0, None))
         assert abs(v - want) <= 1e-12 * want
-    st = ex.stats
+    st = result.stats
     assert st["parts_inside"] > st["parts_clipped"] > 0
     assert st["parts_culled"] > 0 and st["poses_boolean"] == 0
 

@@ -14,10 +14,10 @@ import pytest
 import trimesh
 
 import exactgrasp as eg
-from exactgrasp.errors import GraspFileError, JointError, MeshError, ModelError
+from exactgrasp.errors import Fix, GraspFileError, JointError, MeshError, ModelError
 from exactgrasp.geometry.intake import UNITS
 from exactgrasp.grasp import FORMAT
-from exactgrasp.grasp.files import HAND_KEYS, OBJECT_KEYS, file_spelling
+from exactgrasp.grasp.files import HAND_KEYS, OBJECT_KEYS, file_terms
 from exactgrasp.grasp.schema import INFORMATIONAL, check_grasp_data, grasp_file_schema
 from exactgrasp.hands.barrett import barrett
 from exactgrasp.hands.builtins import BUILTIN_HANDS
@@ -96,7 +96,8 @@ def test_schema_names_what_the_code_takes():
     # every key has a description; the file's spelling of each Python option is a schema key
     assert all(sub.get("description") for sub in KEYS.values())
     spelled = [*OBJECT_KEYS.values(), *(k for keys in HAND_KEYS.values() for k in keys.values())]
-    assert set(spelled) <= set(KEYS)
+    # ("": a Python-only setting, such as check_scale, that no key reaches)
+    assert set(spelled) - {""} <= set(KEYS)
 
 
 def test_real_barrett_grasp_files_all_load(shared_data):
@@ -482,19 +483,29 @@ def test_hand_errors_name_the_file_keys(tmp_path, grasp_file):
         eg.Grasp.from_file(write(path, rigid))
 
 
-def test_file_spelling():
-    assert file_spelling("pass repair=True to fix it", OBJECT_KEYS) == (
-        'set "object_repair": true in the grasp file to fix it'
+def test_file_terms():
+    def key(fix, keys):
+        return fix.replace(file_key=keys[fix.parameter])
+
+    assert file_terms(key(Fix("repair", True, "pass"), OBJECT_KEYS)) == (
+        'set "object_repair": true in the grasp file'
     )
-    assert file_spelling("as Solid(repair=True) does", HAND_KEYS["model"]) == (
-        "as Solid(repair=True) does"
+    assert file_terms(key(Fix("package_dirs", ["/a"], "Pass"), HAND_KEYS["model"])) == (
+        'Set "hand_options": {"package_dirs": ["/a"]} in the grasp file'
     )
-    assert file_spelling("Pass package_dirs=['/a'] or", HAND_KEYS["model"]) == (
-        'Set "hand_options": {"package_dirs": ["/a"]} in the grasp file or'
+    assert file_terms(key(Fix("repair", True), HAND_KEYS["file"])) == '"hand": {"repair": true}'
+    assert file_terms(key(Fix("units", form="where"), OBJECT_KEYS)) == (
+        '"object_units" in the grasp file'
     )
-    assert (
-        file_spelling("(with repair=True)", HAND_KEYS["file"]) == '(with "hand": {"repair": true})'
-    )
+    # a Python-only escape hatch is dropped, a fix without a key keeps its Python spelling
+    assert file_terms(key(Fix("check_scale", False, "pass"), OBJECT_KEYS)) is None
+    assert file_terms(Fix("repair", True, "pass")) == "pass repair=True"
+    # the whole message: the same parts, spelled for the file
+    error = MeshError("m: ", Fix("repair", True, "pass"), " to fix it")
+    assert str(error) == "m: pass repair=True to fix it"
+    again = error.respelled(file_terms, "g.json: object: ", keys=OBJECT_KEYS, cls=GraspFileError)
+    assert str(again) == 'g.json: object: m: set "object_repair": true in the grasp file to fix it'
+    assert type(again) is GraspFileError and again.parameter == "repair"
 
 
 # -- the docs ---------------------------------------------------------------------------------

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import astuple
 
 import manifold3d
 import numpy as np
@@ -14,7 +15,7 @@ import exactgrasp as eg
 from exactgrasp.cli.main import main
 from exactgrasp.errors import BackendError, MeshError
 from exactgrasp.geometry import primitives
-from exactgrasp.overlap import as_solid, intersection_volume
+from exactgrasp.overlap import as_solid, intersection, intersection_volume
 from tests.conftest import box_arrays
 
 
@@ -45,7 +46,7 @@ def boolean_volume(a, b, pose) -> float:
 def test_overlapping_boxes_give_the_box_intersection():
     a = box_arrays([0, 0, 0], [0.1, 0.08, 0.06])
     b = box_arrays([0, 0, 0], [0.05, 0.05, 0.05])
-    volume, bound = intersection_volume(a, b, translation(0.07, 0.05, 0.03), return_bounds=True)
+    volume, bound = astuple(intersection(a, b, translation(0.07, 0.05, 0.03)))
     assert isinstance(volume, float) and isinstance(bound, float)
     expected = 0.03 * 0.03 * 0.03
     assert abs(volume - expected) <= bound + 1e-15 * expected
@@ -55,9 +56,7 @@ def test_overlapping_boxes_give_the_box_intersection():
 def test_icosphere_inside_a_box_gives_its_volume():
     sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.03)
     box = trimesh.creation.box(extents=(0.1, 0.1, 0.1))
-    volume, bound = intersection_volume(
-        box, sphere, translation(0.01, -0.005, 0.002), return_bounds=True
-    )
+    volume, bound = astuple(intersection(box, sphere, translation(0.01, -0.005, 0.002)))
     assert volume == pytest.approx(sphere.volume, rel=1e-12)
     assert abs(volume - sphere.volume) <= bound + 1e-14 * sphere.volume
 
@@ -65,7 +64,7 @@ def test_icosphere_inside_a_box_gives_its_volume():
 def test_disjoint_meshes_give_exactly_zero():
     a = box_arrays([0, 0, 0], [0.1, 0.1, 0.1])
     b = trimesh.creation.icosphere(radius=0.02)
-    volume, bound = intersection_volume(a, b, translation(0.5, 0, 0), return_bounds=True)
+    volume, bound = astuple(intersection(a, b, translation(0.5, 0, 0)))
     assert volume == 0.0 and bound == 0.0
 
 
@@ -85,7 +84,7 @@ def test_a_stack_of_translations():
     b = box_arrays([0, 0.03, 0.03], [0.04, 0.07, 0.07])
     xs = np.array([[-0.06, -0.03, -0.01], [0.02, 0.08, 0.13]])
     poses = np.stack([translation(x) for x in xs.ravel()]).reshape(2, 3, 4, 4)
-    volumes, bounds = intersection_volume(a, b, poses, return_bounds=True)
+    volumes, bounds = astuple(intersection(a, b, poses))
     assert volumes.shape == bounds.shape == (2, 3)
     length = np.clip(np.minimum(xs + 0.04, 0.1) - np.maximum(xs, 0.0), 0.0, None)
     expected = length * 0.04**2
@@ -109,7 +108,7 @@ def test_random_rigid_poses_agree_with_the_manifold3d_boolean():
     poses = np.tile(np.eye(4), (40, 1, 1))
     poses[:, :3, :3] = Rotation.random(40, random_state=rng).as_matrix()
     poses[:, :3, 3] = rng.uniform(-0.05, 0.05, size=(40, 3))
-    volumes, bounds = intersection_volume(a, b, poses, return_bounds=True)
+    volumes, bounds = astuple(intersection(a, b, poses))
     reference = np.array([boolean_volume(a, b, p) for p in poses])
     assert (reference > 0).sum() >= 20 and (reference == 0).sum() >= 1
     assert np.all(volumes >= 0)
@@ -278,10 +277,9 @@ def test_a_real_penetrating_grasp_matches_its_recorded_boolean(shared_data):
     data = json.loads(record.read_text())
     bottle = (record.parent / data["object"]).resolve()
     with pytest.warns(UserWarning, match="merged shells"):
-        volume, bound = intersection_volume(
-            hand, bottle, np.array(data["object_pose_in_hand"]), units=("m", "mm"),
-            return_bounds=True,
-        )  # fmt: skip
+        pose = np.array(data["object_pose_in_hand"])
+        result = intersection(hand, bottle, pose, units=("m", "mm"))
+    volume, bound = result.volumes, result.bounds
     # Recorded from the links unioned another way, which moves it by a few 1e-9 relative.
     recorded = data["checks"]["hand_object_intersection_m3"]
     assert abs(volume - recorded) <= 1e-8 * recorded

@@ -346,6 +346,15 @@ def test_backend_volumes_cache_and_params():
     assert backend.name == "voxel" and "VoxelBackend(hand_resolution=60" in repr(backend)
 
 
+def test_every_parameter_keys_the_grid_or_the_points():
+    from exactgrasp.backends.voxel.backend import GRID_PARAMETERS, POINT_PARAMETERS
+
+    # A parameter missing from both would let a cached grid or point set of other settings
+    # serve a backend; the hand's resolution alone does not shape the points.
+    assert set(GRID_PARAMETERS) | set(POINT_PARAMETERS) == set(VoxelBackend.parameter_constraints)
+    assert "hand_resolution" not in POINT_PARAMETERS
+
+
 def test_backends_share_grids_and_points_of_the_same_geometry():
     grasp = ArrayGrasp(HAND_BOX, [box_arrays([-0.5, -0.3, -0.4], [0.5, 0.3, 0.4])])
     first, second = VoxelBackend(hand_resolution=30), VoxelBackend(hand_resolution=30)

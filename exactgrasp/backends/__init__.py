@@ -1,7 +1,10 @@
 """Intersection backends, by name.
 
-Built-in: ``"voxel"`` (the paper's voxel-count estimator) and ``"exact"`` (manifold3d boolean
-volumes with a coal or python-fcl broad phase). Other packages add backends through the entry
+Built-in: ``"voxel"`` (the paper's voxel-count estimator) and ``"exact"`` (the true volume of
+hand ∩ moved object: a compiled kernel of certified surface integrals over the manifold3d
+unions of hand and object, a plain manifold3d boolean for the poses it cannot certify, and a
+coal or python-fcl broad phase that skips poses whose surfaces are apart; see
+``docs/exact-backend.md``). Other packages add backends through the entry
 point group ``exactgrasp.backends``; `register_backend` adds one at run time (see
 ``docs/backends.md``). Re-exports the registry and the backend interface.
 """

@@ -1,8 +1,6 @@
 """The interface every intersection backend implements, and what backends share: the
 rigid-pose check, poses equal to rounding (`repeated_poses`) and the threads that
 ``n_jobs=None`` means (`default_threads`, `thread_limit`).
-
-Imports `exactgrasp.errors`, `exactgrasp.geometry.se3` and the backends' parameter checks.
 """
 
 from __future__ import annotations

@@ -2,8 +2,7 @@
 
 A backend declares, once, what each constructor parameter may be (``parameter_constraints``,
 a dict of `Param`) and calls `validate_parameters` in its constructor; every refusal then reads
-the same way: the backend, the parameter, the value given and what is allowed. Imports
-`exactgrasp.errors` only.
+the same way: the backend, the parameter, the value given and what is allowed.
 """
 
 from __future__ import annotations

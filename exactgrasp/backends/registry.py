@@ -3,13 +3,13 @@
 `BACKENDS` maps a name to a `BackendEntry` (a class, or a ``"module:Class"`` path imported on
 first use); the entry point group ``exactgrasp.backends`` is read on every lookup and fills in
 the names `BACKENDS` lacks. `shared_backend` keeps one instance per (name, parameters), so the
-per-geometry caches of a backend serve every later grasp. Imports the backends' base,
-defaults, `exactgrasp.cache` and `exactgrasp.errors`.
+per-geometry caches of a backend serve every later grasp.
 """
 
 from __future__ import annotations
 
 import importlib
+import inspect
 import json
 import warnings
 from collections.abc import Iterable
@@ -209,10 +209,16 @@ def get_backend(name: str | Backend, **params: Any) -> Backend:
     if not isinstance(name, str):
         raise BackendError(f"backend must be a name or a Backend, got {type(name).__name__}.")
     cls = _load(name)
+    # The parameters are matched to the constructor's signature before the call, so that a
+    # TypeError raised inside the constructor (a bug) is not mistaken for bad parameters.
     try:
-        return cls(**params)
+        inspect.signature(cls).bind(**params)
     except TypeError as exc:
-        raise BackendError(f"backend {name!r}: bad parameters {sorted(params)} ({exc}).") from exc
+        raise BackendError(
+            f"backend {name!r}: bad parameters {sorted(params)} "
+            f"({cls.__qualname__}.__init__() {exc})."
+        ) from exc
+    return cls(**params)
 
 
 def shared_backend(name: str | Backend, **params: Any) -> Backend:

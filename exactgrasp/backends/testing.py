@@ -4,8 +4,7 @@ Every backend, built-in or from another package, must pass these: result shapes 
 finite non-negative volumes, refusal of poses that are not rigid motions (naming the pose),
 zero for a far pose, the object's volume when it lies inside a hand link, the same volume
 whatever units the meshes were given in, JSON parameters that rebuild the backend, and
-repeatable results. The test grasps are built here from primitive boxes (no files). Imports
-the backends' base, `exactgrasp.geometry`, `exactgrasp.hands` and `exactgrasp.grasp`.
+repeatable results. The test grasps are built here from primitive boxes (no files).
 """
 
 from __future__ import annotations

@@ -2,8 +2,6 @@
 
 `run` holds `run_batch`, `manifest` the manifest reader, `store` the files of a run, `worker`
 what runs on the workers; the ``exactgrasp batch`` command is `exactgrasp.cli.batch`.
-
-May import: `exactgrasp.errors` and the `exactgrasp.batch` modules; never `exactgrasp.cli`.
 """
 
 from exactgrasp.batch.manifest import read_manifest

@@ -4,7 +4,7 @@ A manifest is ``.jsonl`` (one JSON object a line) or ``.parquet`` (columns ``id`
 ``grasp``); each row names a grasp file relative to the manifest's folder, or holds an inline
 grasp. See ``docs/batch.md``.
 
-May import: `exactgrasp.errors` (pyarrow only through `require`, for Parquet manifests).
+pyarrow loads only through `exactgrasp.errors.require`, for Parquet manifests.
 """
 
 from __future__ import annotations

@@ -6,10 +6,6 @@ existing scheduler); the workers only compute and send results back, and this pr
 every file, so workers need no shared file system and each part is renamed into place whole.
 A resume skips the parts already there. See ``docs/batch.md`` for the file layout and the
 choices made; the ``exactgrasp batch`` command is `exactgrasp.cli.batch`.
-
-May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.progress`, `exactgrasp.paths`,
-`exactgrasp.backends`, `exactgrasp.diagnostics`, the other `exactgrasp.batch` modules; never
-`exactgrasp.cli`.
 """
 
 from __future__ import annotations
@@ -42,7 +38,7 @@ from exactgrasp.batch.store import (
 )
 from exactgrasp.batch.worker import default_workers, open_pool
 from exactgrasp.diagnostics import ignores_third_party_warnings
-from exactgrasp.errors import BatchError
+from exactgrasp.errors import BatchError, Fix
 from exactgrasp.geometry.intake import UNITS
 from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
@@ -202,10 +198,17 @@ def run_batch(
     """
     started = time.perf_counter()
     if scheduler is not None and workers is not None:
-        raise BatchError("workers= sets up a local cluster; with scheduler= use its workers.")
+        raise BatchError(
+            Fix("workers", None, shown=""),
+            " sets up a local cluster; with ",
+            Fix("scheduler", shown=""),
+            " ",
+            Fix("workers", None, "pass", python="use its workers"),
+            ".",
+        )
     for name, value, low in (("workers", workers, 0), ("part_size", part_size, 1)):
         if value is not None and (not isinstance(value, int | np.integer) or value < low):
-            raise BatchError(f"{name} must be an integer >= {low}, got {value!r}.")
+            raise BatchError(Fix(name), f" must be an integer >= {low}, got {value!r}.")
     if on_limit not in (None, "error", "clip"):
         raise BatchError(f"on_limit must be 'error' or 'clip', got {on_limit!r}.")
     if units is not None and units not in UNITS:

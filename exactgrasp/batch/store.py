@@ -15,8 +15,7 @@ the bytes do not depend on the number of workers or on the order parts finish in
 but ``timings.jsonl`` is written through `atomic_target` (temporary name, fsync, rename).
 The manifest is read by `exactgrasp.batch.manifest`.
 
-May import: `exactgrasp.errors`, `exactgrasp.descriptor`, `exactgrasp.batch.manifest` (pyarrow
-only through `require`).
+pyarrow loads only through `exactgrasp.errors.require`.
 """
 
 from __future__ import annotations

@@ -3,9 +3,7 @@
 `exactgrasp.batch.run` keeps the run logic (parts, resume, files); this module holds what
 executes on a worker process (`compute_rows`) or in this process (`open_pool`, the pools).
 
-May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.paths`, `exactgrasp.grasp`,
-`exactgrasp.backends`, `exactgrasp.descriptor`, `exactgrasp.diagnostics`,
-`exactgrasp.batch.manifest` (distributed only through `require`).
+distributed loads only through `exactgrasp.errors.require`.
 """
 
 from __future__ import annotations

@@ -2,8 +2,6 @@
 
 ``main`` is the console script ``exactgrasp.cli:main``; ``python -m exactgrasp.cli`` runs it
 too (`exactgrasp.cli.__main__`).
-
-May import: `exactgrasp.cli.main`.
 """
 
 from exactgrasp.cli.main import build_parser, main

@@ -1,7 +1,4 @@
-"""``python -m exactgrasp.cli``: the ``exactgrasp`` command.
-
-May import: `exactgrasp.cli.main`.
-"""
+"""``python -m exactgrasp.cli``: the ``exactgrasp`` command."""
 
 import sys
 

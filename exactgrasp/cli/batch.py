@@ -4,8 +4,7 @@
 as `run_batch`'s ``units``, ``repair`` and ``on_limit`` do; errors name the flags, not those
 arguments.
 
-May import: `exactgrasp.errors`, `exactgrasp.cli.common`, `exactgrasp.cli.params`,
-`exactgrasp.batch` (pyarrow and distributed load only when a batch runs).
+pyarrow and distributed load only when a batch runs.
 """
 
 from __future__ import annotations
@@ -16,28 +15,30 @@ from typing import Any
 
 from exactgrasp.batch.run import DEFAULT_PART_SIZE, run_batch
 from exactgrasp.cli.common import (
+    FlagTerms,
     add_backend,
     add_grasp_options,
     add_progress,
     add_sampler,
-    flag_message,
-    renamed,
+    flag,
+    in_flag_terms,
     sampler_from_args,
 )
 from exactgrasp.cli.params import add_param, build_backend, split_params
-from exactgrasp.errors import BatchError
+from exactgrasp.errors import BatchError, Fix
 
-__all__ = ["BATCH_FLAGS", "add_parser", "cmd_batch"]
+__all__ = ["BATCH_TERMS", "add_parser", "cmd_batch"]
 
-#: `run_batch`'s spellings of its arguments in messages, and the flags that set them here.
-BATCH_FLAGS = (
-    (
-        "workers= sets up a local cluster; with scheduler= use its workers.",
-        "--workers sets up a local cluster; with --scheduler the cluster's own workers "
-        "compute: leave --workers out.",
-    ),
-    ("workers must be an integer >= 0, got", "--workers must be an integer >= 0, got"),
-    ("part_size must be an integer >= 1, got", "--part-size must be an integer >= 1, got"),
+
+def _workers(fix: Fix) -> str:
+    if fix.form == "pass" and fix.value is None:  # with a scheduler: leave workers out
+        return "the cluster's own workers compute: leave --workers out"
+    return "--workers"
+
+
+#: `run_batch`'s arguments and the flags that set them here.
+BATCH_TERMS = FlagTerms(
+    {"workers": _workers, "scheduler": flag("--scheduler"), "part_size": flag("--part-size")}
 )
 
 
@@ -49,10 +50,9 @@ def cmd_batch(args: argparse.Namespace) -> int:
     try:
         summary = _run(args, sampler, params)
     except BatchError as exc:
-        message = flag_message(str(exc), BATCH_FLAGS)
-        if message == str(exc):
+        if not exc.fixes:
             raise
-        raise renamed(exc, message) from exc
+        raise in_flag_terms(exc, BATCH_TERMS) from exc
     print(summary.text(), file=sys.stdout)
     return summary.exit_status
 

@@ -3,9 +3,6 @@
 The command-line face of `exactgrasp.grasp.closing.close_fingers` (as `close_grasp` applies
 it to a grasp): writes the closed grasp file and prints, finger by finger, each closing
 joint's value and whether the finger touches the object.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry.bvh`, `exactgrasp.grasp`,
-`exactgrasp.cli.common`.
 """
 
 from __future__ import annotations
@@ -15,7 +12,13 @@ import inspect
 import warnings
 from typing import Any
 
-from exactgrasp.cli.common import add_grasp_options, flag_message, grasp_from_args, renamed
+from exactgrasp.cli.common import (
+    FlagTerms,
+    add_grasp_options,
+    flag,
+    grasp_from_args,
+    in_flag_terms,
+)
 from exactgrasp.errors import ClosingError, JointError
 from exactgrasp.geometry.bvh import ENGINES
 from exactgrasp.grasp import Grasp
@@ -25,13 +28,14 @@ __all__ = ["add_parser", "cmd_close", "summary_lines"]
 
 #: Defaults of `close_fingers`' options, shown and used by the flags.
 DEFAULTS = {k: p.default for k, p in inspect.signature(close_fingers).parameters.items()}
-#: `close_fingers`' spellings of its arguments in messages, and the flags that set them here.
-CLOSING_FLAGS = (
-    ("joints=[...]", "--joints J1,J2,..."),
-    ("joints is empty", "--joints is empty"),
-    ("pass backoff=True", "leave out --no-backoff"),
-    ("tolerance must", "--tolerance must"),
-    ("step must", "--step must"),
+#: `close_fingers`' arguments and the flags that set them here.
+CLOSING_TERMS = FlagTerms(
+    {
+        "joints": lambda fix: flag("--joints J1,J2,..." if fix.shown else "--joints")(fix),
+        "backoff": lambda fix: "leave out --no-backoff" if fix.value is True else None,
+        "tolerance": flag("--tolerance"),
+        "step": flag("--step"),
+    }
 )
 
 
@@ -113,8 +117,7 @@ def cmd_close(args: argparse.Namespace) -> int:
                 full_output=True,
             )
     except (ClosingError, JointError) as exc:
-        message = f"grasp {grasp.name!r}: {flag_message(str(exc), CLOSING_FLAGS)}"
-        raise renamed(exc, message) from exc
+        raise in_flag_terms(exc, CLOSING_TERMS, f"grasp {grasp.name!r}: ") from exc
     closed = Grasp(result.hand, grasp.object, result.object_pose, name=grasp.name)
     out = closed.save(args.output)
     touching = sum(bool(f.contact_links) for f in result.fingers)

@@ -3,93 +3,123 @@
 grasp with them.
 
 Each option is defined here once, so every command spells, checks and documents it the same
-way; errors name the flag, never the Python argument behind it. ``--param`` lives in
+way; errors name the flag, never the Python argument behind it: `FlagTerms` spells the fixes
+that errors carry (`exactgrasp.errors.Fix`) as flags. ``--param`` lives in
 `exactgrasp.cli.params`.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry.intake`, `exactgrasp.paths`,
-`exactgrasp.grasp`, `exactgrasp.backends.defaults`; no other `exactgrasp.cli` module.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
-from exactgrasp.errors import ExactGraspError, SamplerError
+from exactgrasp.errors import ExactGraspError, Fix, SamplerError
 from exactgrasp.geometry.intake import UNITS
 from exactgrasp.grasp import Grasp
-from exactgrasp.paths.presets import DEFAULT_PRESET, SAMPLER_PARAMETERS, accepted_forms, as_sampler
+from exactgrasp.grasp.files import file_terms
+from exactgrasp.paths.presets import DEFAULT_PRESET, SAMPLER_PARAMETERS, as_sampler
 from exactgrasp.paths.sampler import PRESETS, PathSampler
 
 __all__ = [
-    "FILE_KEYS_TO_FLAGS",
+    "FILE_KEY_FLAGS",
+    "GRASP_FLAGS",
+    "GRASP_TERMS",
     "ON_LIMIT",
-    "PYTHON_TO_FLAGS",
+    "FlagTerms",
     "add_backend",
     "add_grasp_options",
     "add_on_limit",
     "add_progress",
     "add_sampler",
     "add_steps",
-    "flag_message",
+    "flag",
     "grasp_from_args",
+    "in_flag_terms",
     "read_grasp",
-    "renamed",
     "sampler_from_args",
 ]
 
 ON_LIMIT = ("error", "clip")
-#: Python spellings in library messages and the flags that set the same thing here.
-PYTHON_TO_FLAGS = (
-    *((f"in units={unit!r}", f"in units {unit}") for unit in UNITS),
-    *((f"units={unit!r}", f"--units {unit}") for unit in UNITS),
-    ("repair=True", "--repair"),
-    ("on_limit='clip'", "--on-limit clip"),
-)
 
 
-def _file_key_fixes(key: str, value: str, flag: str) -> tuple[tuple[str, str], ...]:
-    """How a grasp file's error spells the fix ``key: value``, and the flag that makes it."""
-    spelled = f"{json.dumps(key)}: {value}"
-    return (
-        (f"set {spelled} in the grasp file", f"pass {flag} (or set {spelled} in the grasp file)"),
-        (f"Set {spelled} in the grasp file", f"Pass {flag} (or set {spelled} in the grasp file)"),
-    )
+# -- errors in the command line's terms ---------------------------------------------------
 
 
-#: The grasp-file keys that errors from reading a grasp file name (``set "object_units": "mm"
-#: in the grasp file``) and the flags that override them.
-FILE_KEYS_TO_FLAGS = (
-    *((f'in "object_units": "{u}"', f"in units {u}") for u in UNITS),
-    *(f for u in UNITS for f in _file_key_fixes("object_units", json.dumps(u), f"--units {u}")),
-    *_file_key_fixes("object_repair", "true", "--repair"),
-    *_file_key_fixes("on_limit", '"clip"', "--on-limit clip"),
-    (
-        'takes "object_units" in the grasp file',
-        'takes --units (or "object_units" in the grasp file)',
+def flag(text: str) -> Callable[[Fix], str]:
+    """The spelling of a fix set by the flag ``text`` (with the fix's verb: ``pass --repair``)."""
+
+    def spell(fix: Fix) -> str:
+        return f"{fix.form} {text}" if fix.form in ("pass", "Pass") else text
+
+    return spell
+
+
+def _units_flag(fix: Fix) -> str | None:
+    if fix.value is ...:
+        return flag("--units")(fix)
+    return flag(f"--units {fix.value}")(fix) if fix.value in UNITS else None
+
+
+#: The flags of the grasp-file options (`add_grasp_options`), by `run_batch`'s and
+#: `Grasp.from_file`'s argument: the fix in the flag's words (None keeps the Python spelling).
+GRASP_FLAGS: dict[str, Callable[[Fix], str | None]] = {
+    "units": _units_flag,
+    "repair": lambda fix: flag("--repair")(fix) if fix.value is True else None,
+    "on_limit": lambda fix: (
+        flag(f"--on-limit {fix.value}")(fix) if fix.value in ON_LIMIT else None
     ),
-    *PYTHON_TO_FLAGS,
-)
+}
+#: The grasp-file keys that the grasp-file flags override, and the argument behind each.
+FILE_KEY_FLAGS = {"object_units": "units", "object_repair": "repair", "on_limit": "on_limit"}
 
 
-def flag_message(message: str, pairs: tuple[tuple[str, str], ...] = PYTHON_TO_FLAGS) -> str:
-    """A library message with its Python argument spellings replaced by the flags."""
-    for python, flag in pairs:
-        message = message.replace(python, flag)
-    return message
+@dataclass(frozen=True)
+class FlagTerms:
+    """A `Fix` in a command's words: the flag that sets its parameter; for a grasp-file key the
+    command overrides, the flag and then the key (``pass --repair (or set "object_repair":
+    true in the grasp file)``); any other, as the Python API or the grasp file spells it.
+
+    Parameters
+    ----------
+    flags : dict of str to callable
+        Argument -> its fix in the command's words (None keeps the Python spelling).
+    """
+
+    flags: Mapping[str, Callable[[Fix], str | None]]
+
+    def __call__(self, fix: Fix) -> str | None:
+        if fix.file_key is not None:
+            return self._file_key(fix)
+        if fix.form == "is" and fix.parameter in self.flags:
+            return f"{fix.parameter} {fix.value}"  # the value in force: not a flag to pass
+        spell = self.flags.get(fix.parameter)
+        spelled = spell(fix) if spell is not None else None
+        return fix.in_python() if spelled is None else spelled
+
+    def _file_key(self, fix: Fix) -> str | None:
+        parameter = FILE_KEY_FLAGS.get(fix.file_key)
+        if parameter not in self.flags or fix.form not in ("pass", "Pass", "is", "where"):
+            return file_terms(fix)
+        if fix.form == "is":
+            return f"{fix.parameter} {fix.value}"
+        in_file = file_terms(fix.replace(form="where" if fix.form == "where" else "pass"))
+        if fix.form == "where":
+            return f"{self.flags[parameter](fix.replace(form=''))} (or {in_file})"
+        return f"{self.flags[parameter](fix)} (or {in_file})"
 
 
-def renamed(exc: ExactGraspError, message: str) -> ExactGraspError:
-    """An error of the same class as ``exc`` with another message (the base class where that
-    class takes other constructor arguments)."""
-    try:
-        return type(exc)(message)
-    except TypeError:
-        return ExactGraspError(message)
+#: The grasp-file options' spelling, for commands that read grasp files.
+GRASP_TERMS = FlagTerms(GRASP_FLAGS)
+
+
+def in_flag_terms(exc: ExactGraspError, terms: FlagTerms, *prefix: str) -> ExactGraspError:
+    """``exc`` with its fixes spelled as ``terms``' flags (and ``prefix`` before it); raise it
+    ``from exc``."""
+    return exc.respelled(terms, *prefix)
 
 
 # -- --backend -------------------------------------------------------------------------------
@@ -113,6 +143,13 @@ def _sampler_forms() -> str:
         f"use a preset ({', '.join(PRESETS)}), JSON text of PathSampler parameters "
         f"({', '.join(SAMPLER_PARAMETERS)}) or the path of a JSON file holding them"
     )
+
+
+def _sampler_terms(fix: Fix) -> str | None:
+    """`as_sampler`'s fixes on the command line: the flag names the value, and its forms."""
+    if fix.form == "subject":
+        return None
+    return _sampler_forms() if fix.form == "forms" else fix.in_python()
 
 
 def add_steps(parser: argparse.ArgumentParser) -> None:
@@ -164,9 +201,7 @@ def sampler_from_args(args: argparse.Namespace) -> PathSampler:
         return as_sampler(text_or_file, n_steps=steps)
     except SamplerError as exc:
         # The library's message names the value and the Python forms; here, the flag's.
-        reason = str(exc).replace(accepted_forms(), _sampler_forms())
-        reason = re.sub(r"^sampler (file )?('[^']*'|\{.*?\}): ", "", reason)
-        raise SamplerError(f"--sampler {text!r}: {reason}") from exc
+        raise exc.respelled(_sampler_terms, f"--sampler {text!r}: ") from exc
 
 
 # -- --progress ------------------------------------------------------------------------------
@@ -249,10 +284,9 @@ def read_grasp(
     try:
         return Grasp.from_file(path, **overrides)
     except ExactGraspError as exc:
-        message = flag_message(str(exc), FILE_KEYS_TO_FLAGS)
-        if message == str(exc):
+        if not exc.fixes:
             raise
-        raise renamed(exc, message) from exc
+        raise in_flag_terms(exc, GRASP_TERMS) from exc
 
 
 def grasp_from_args(args: argparse.Namespace, path: str | os.PathLike | None = None) -> Grasp:

@@ -3,9 +3,6 @@ grasp file.
 
 The command-line face of `exactgrasp.descriptor.pairwise_distances` and
 `exactgrasp.compare.compare_backends`.
-
-May import: `exactgrasp.errors`, `exactgrasp.backends.defaults`, `exactgrasp.cli.common`,
-`exactgrasp.cli.params`, `exactgrasp.descriptor`, `exactgrasp.compare`.
 """
 
 from __future__ import annotations

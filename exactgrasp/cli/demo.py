@@ -1,9 +1,4 @@
-"""``exactgrasp demo``: built-in grasps on every available backend, a table and a plot.
-
-May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.geometry`,
-`exactgrasp.hands`, `exactgrasp.paths`, `exactgrasp.grasp`, `exactgrasp.backends`,
-`exactgrasp.descriptor`.
-"""
+"""``exactgrasp demo``: built-in grasps on every available backend, a table and a plot."""
 
 from __future__ import annotations
 

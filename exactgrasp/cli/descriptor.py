@@ -1,8 +1,6 @@
 """``exactgrasp descriptor``: the descriptor of one grasp file, written as ``.npz``.
 
 The command-line face of `exactgrasp.descriptor.compute_descriptor`.
-
-May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.descriptor`.
 """
 
 from __future__ import annotations

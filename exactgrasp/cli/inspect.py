@@ -6,21 +6,17 @@ that could be the hand, and what `exactgrasp.hands.loading.load_model` makes of 
 (joints, palm frame, the joints `exactgrasp.grasp.closing.close_fingers` closes and their
 directions): enough to choose ``root_body``, the palm frame and the closing joints without
 reading XML.
-
-May import: `exactgrasp.errors`, `exactgrasp.cli.common`, `exactgrasp.hands` (builtins, hand,
-loading, scene) and `exactgrasp.grasp.closing`.
 """
 
 from __future__ import annotations
 
 import argparse
-import re
 import warnings
 from pathlib import Path
 from typing import Any
 
-from exactgrasp.cli.common import renamed
-from exactgrasp.errors import ExactGraspError, ModelError
+from exactgrasp.cli.common import FlagTerms, flag, in_flag_terms
+from exactgrasp.errors import ExactGraspError, Fix, ModelError
 from exactgrasp.grasp.closing import closing_directions
 from exactgrasp.hands.builtins import BUILTIN_MJCF, get_builtin
 from exactgrasp.hands.hand import Hand
@@ -29,21 +25,22 @@ from exactgrasp.hands.scene import body_tree
 
 __all__ = ["add_parser", "cmd_inspect", "inspect_lines", "package_dirs_from_args"]
 
-#: `load_model`'s spellings of ``package_dirs`` in messages, and the flag that sets it here.
-PACKAGE_DIR_FLAG = (
-    (re.compile(r"package_dirs=\{'([^']*)': '([^']*)'\}"), r"--package-dir \1=\2"),
-    (re.compile(r"package_dirs=\['([^']*)'\]"), r"--package-dir \1"),
-    (re.compile(r"package_dirs\['([^']*)'\] '([^']*)'"), r"--package-dir \1=\2: '\2'"),
-    (re.compile(r"package_dirs entry|package_dirs\b"), "--package-dir"),
-)
+
+def _package_dir(fix: Fix) -> str:
+    """``package_dirs`` as ``--package-dir`` items: ``NAME=DIR`` for a dict, ``DIR`` for a
+    list; an entry named in a message ends with a colon."""
+    value = fix.value
+    if isinstance(value, dict):
+        text = " ".join(f"--package-dir {name}={folder}" for name, folder in value.items())
+    elif isinstance(value, list):
+        text = " ".join(f"--package-dir {folder}" for folder in value)
+    else:
+        return "--package-dir"
+    return f"{text}:" if fix.form == "entry" else flag(text)(fix)
 
 
-def _flag_spelling(exc: ExactGraspError) -> ExactGraspError:
-    """``exc`` with ``package_dirs=...`` spelled as the ``--package-dir`` flag."""
-    message = str(exc)
-    for pattern, flag in PACKAGE_DIR_FLAG:
-        message = pattern.sub(flag, message)
-    return renamed(exc, message) if message != str(exc) else exc
+#: `load_model`'s ``package_dirs`` and the flag that sets it here.
+PACKAGE_DIR_TERMS = FlagTerms({"package_dirs": _package_dir})
 
 
 def package_dirs_from_args(values: list[str] | None) -> Any:
@@ -137,7 +134,7 @@ def cmd_inspect(args: argparse.Namespace) -> int:
     try:
         lines = inspect_lines(args.model, args.geometry, dirs, args.root_body)
     except ModelError as exc:
-        raise _flag_spelling(exc) from exc
+        raise in_flag_terms(exc, PACKAGE_DIR_TERMS) from exc
     for line in lines:
         print(line)
     return 0

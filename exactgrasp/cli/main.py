@@ -5,9 +5,6 @@ adds its sub-parser and sets ``func`` (the handler: parsed arguments in, exit st
 Adding a command is a new module plus one entry in `COMMANDS`, whose order is the order of
 ``exactgrasp --help``. Handlers raise `ExactGraspError` for bad input; `main` turns it into
 a message and exit status 2 (`exactgrasp.errors.run_reporting_errors`).
-
-May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.diagnostics` (third-party
-warnings stop here) and the command modules of `exactgrasp.cli`.
 """
 
 from __future__ import annotations

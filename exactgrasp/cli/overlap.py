@@ -3,9 +3,6 @@
 The command-line face of `exactgrasp.overlap.intersection_volume`: prints the volume of A ∩ B
 (B moved by ``--pose``) and its certified error bound, in m^3 (see
 ``docs/penetration-volume.md``).
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry.intake`, `exactgrasp.backends.base`,
-`exactgrasp.overlap`, `exactgrasp.cli.common`.
 """
 
 from __future__ import annotations
@@ -18,18 +15,23 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.backends.base import check_poses
-from exactgrasp.cli.common import PYTHON_TO_FLAGS, flag_message, renamed
+from exactgrasp.cli.common import GRASP_FLAGS, FlagTerms, flag, in_flag_terms
 from exactgrasp.errors import ExactGraspError
 from exactgrasp.geometry.intake import UNITS
-from exactgrasp.overlap import as_solid, intersection_volume
+from exactgrasp.overlap import as_solid, intersection
 
 __all__ = ["add_parser", "cmd_overlap", "read_pose", "read_units"]
 
 #: Keys of a JSON object that hold the pose(s), in the order they are looked for.
 POSE_KEYS = ("poses", "pose", "object_pose_in_hand")
 UNIT_NAMES = sorted(set(UNITS) - {"in"})
-#: The intake's messages name Python arguments; on the command line they are flags.
-FLAGS = (*PYTHON_TO_FLAGS, ("check_scale=False", "--no-check-scale"))
+#: The intake's arguments and the flags that set them here.
+TERMS = FlagTerms(
+    {
+        **GRASP_FLAGS,
+        "check_scale": lambda fix: flag("--no-check-scale")(fix) if fix.value is False else None,
+    }
+)
 
 
 def read_pose(text: str) -> np.ndarray:
@@ -107,9 +109,10 @@ def cmd_overlap(args: argparse.Namespace) -> int:
     try:
         a = as_solid(args.a, "A", units=units_a, **options)
         b = as_solid(args.b, "B", units=units_b, **options)
-        volumes, bounds = intersection_volume(a, b, poses, return_bounds=True)
+        result = intersection(a, b, poses)
+        volumes, bounds = result.volumes, result.bounds
     except ExactGraspError as exc:
-        raise renamed(exc, flag_message(str(exc), FLAGS)) from exc
+        raise in_flag_terms(exc, TERMS) from exc
     if np.ndim(volumes) == 0:
         print(f"volume {volumes:.12g} m^3 (bound {bounds:.2g} m^3)")
         return 0

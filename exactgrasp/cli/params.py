@@ -5,9 +5,6 @@ Nothing here names a parameter: the keys, what each may be and its default are r
 backend class (`Backend.parameter_constraints`, the constructor's signature) when a command
 checks its ``--param`` items or prints its ``--help``, so a new parameter, or a new backend,
 shows up without touching the command line.
-
-May import: `exactgrasp.errors`, `exactgrasp.backends` (registry, base, params, defaults),
-`exactgrasp.cli.common`.
 """
 
 from __future__ import annotations
@@ -23,7 +20,6 @@ from exactgrasp.backends import registry
 from exactgrasp.backends.base import Backend
 from exactgrasp.backends.defaults import COMPARED_BACKENDS
 from exactgrasp.backends.params import Param, describe
-from exactgrasp.cli.common import renamed
 from exactgrasp.errors import BackendError, ExactGraspError
 
 __all__ = [
@@ -64,8 +60,8 @@ def backend_names() -> list[str]:
 def declared_parameters(cls: type[Backend]) -> dict[str, tuple[Param, Any]]:
     """``{key: (constraint, default)}`` of a backend class, in declaration order.
 
-    The default is the constructor's (``inspect.Parameter.empty`` when it has none, e.g. a
-    ``**tuning`` option whose hint gives it).
+    The default is the constructor's (``inspect.Parameter.empty`` when it has none: a
+    plugin backend may take options through ``**kwargs``; the hint then says it).
     """
     signature = inspect.signature(cls.__init__).parameters
     out = {}
@@ -82,7 +78,7 @@ def _declared(name: str, flag: str) -> dict[str, tuple[Param, Any]] | None:
         try:
             registry.get_backend(name)  # says why: an unknown name or a missing package
         except ExactGraspError as exc:
-            raise renamed(exc, f"{flag} {name}: {exc}") from exc
+            raise exc.prefixed(f"{flag} {name}: ") from exc
     try:
         return declared_parameters(registry.backend_class(name))
     except ExactGraspError:
@@ -237,4 +233,4 @@ def build_backend(name: str, params: Mapping[str, Any]) -> Backend:
     try:
         return registry.get_backend(name, **params)
     except BackendError as exc:
-        raise BackendError(f"--param: {exc}") from exc
+        raise exc.prefixed("--param: ") from exc

@@ -1,8 +1,6 @@
 """``exactgrasp show GRASP.json``: an interactive HTML page (and a PNG) of a grasp and its paths.
 
 The command-line face of `exactgrasp.view.show`; see ``docs/viewing.md``.
-
-May import: `exactgrasp.cli.common`, `exactgrasp.view`.
 """
 
 from __future__ import annotations

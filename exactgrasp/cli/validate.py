@@ -2,8 +2,6 @@
 
 The options and the run live in `exactgrasp.report.args`, shared with
 ``python -m exactgrasp.report``; this module only hangs them under the ``exactgrasp`` command.
-
-May import: `exactgrasp.report.args`.
 """
 
 from __future__ import annotations

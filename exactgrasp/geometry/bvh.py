@@ -1,7 +1,7 @@
 """The coal / python-fcl adapter: BVHs of triangle meshes, their distances, whole-pose culling.
 
 The only module of exactgrasp that imports coal or fcl (both optional, extra ``exact``). Both
-libraries take int64 triangles. Imports only `exactgrasp.errors` and numpy.
+libraries take int64 triangles.
 """
 
 from __future__ import annotations

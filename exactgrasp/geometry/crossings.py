@@ -6,8 +6,6 @@ test whose orientation signs are certified by a static error bound (Shewchuk's, 
 `exactgrasp.geometry.predicates`): a sign inside the bound is *uncertain*. Within one shell
 only certain crossings are reported, and pairs sharing an edge are skipped; between shells an
 uncertain contact is reported too.
-
-Imports: numpy, `exactgrasp.compiling` and `exactgrasp.geometry.predicates` only.
 """
 
 from __future__ import annotations

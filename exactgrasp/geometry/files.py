@@ -1,7 +1,4 @@
-"""Files next to grasp records: resolving and relativising paths, file identities, binary PLY.
-
-Imports only `exactgrasp.errors` and numpy.
-"""
+"""Files next to grasp records: resolving and relativising paths, file identities, binary PLY."""
 
 from __future__ import annotations
 

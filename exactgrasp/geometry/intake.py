@@ -1,7 +1,6 @@
 """Reading meshes and points into the library: units, file loading, sample points.
 
-What `exactgrasp.geometry.solid.Solid` uses to take meshes in. Imports only `exactgrasp.errors`,
-numpy and trimesh.
+What `exactgrasp.geometry.solid.Solid` uses to take meshes in.
 """
 
 from __future__ import annotations
@@ -13,7 +12,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from exactgrasp.errors import MeshError
+from exactgrasp.errors import Fix, MeshError
 
 __all__ = [
     "MAX_PLAUSIBLE_SIZE_M",
@@ -55,7 +54,7 @@ def unit_scale(units: str) -> float:
         return UNITS[units]
     except KeyError:
         raise MeshError(
-            f"units={units!r} is not known; use one of {sorted(set(UNITS) - {'in'})}."
+            Fix("units", units), f" is not known; use one of {sorted(set(UNITS) - {'in'})}."
         ) from None
 
 

@@ -2,7 +2,7 @@
 
 Everything in exactgrasp that hands meshes to manifold3d goes through `to_manifold`, which
 refuses, naming the mesh, the defect and the fix, what manifold3d cannot take as a solid.
-Double precision throughout (``Mesh64``). Imports only `exactgrasp.errors`, numpy and manifold3d.
+Double precision throughout (``Mesh64``).
 """
 
 from __future__ import annotations
@@ -12,15 +12,16 @@ from collections.abc import Sequence
 import manifold3d
 import numpy as np
 
-from exactgrasp.errors import MeshError
+from exactgrasp.errors import Fix, MeshError
 
 __all__ = ["MeshArrays", "mesh_arrays", "to_manifold", "union", "union_solids", "union_volume"]
 
 MeshArrays = tuple[np.ndarray, np.ndarray]
 
 REPAIR_HINT = (
-    "manifold3d needs a closed, consistently oriented surface; load the mesh with repair=True "
-    "(or fix it in a mesh editor) and try again."
+    "manifold3d needs a closed, consistently oriented surface; load the mesh with ",
+    Fix("repair", True),
+    " (or fix it in a mesh editor) and try again.",
 )
 
 
@@ -44,7 +45,7 @@ def to_manifold(
     manifold3d.Manifold
         Of positive volume.
     """
-    fix = fix or REPAIR_HINT
+    fix_parts = REPAIR_HINT if fix is None else (fix,)
     V = np.ascontiguousarray(vertices, dtype=np.float64)
     F = np.asarray(faces)
     if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3 or len(F) == 0:
@@ -53,9 +54,9 @@ def to_manifold(
             f"{V.shape} and {F.shape}; pass a non-empty triangle mesh."
         )
     if not np.all(np.isfinite(V)):
-        raise MeshError(f"{name}: vertex coordinates contain NaN or infinity; {fix}")
+        raise MeshError(f"{name}: vertex coordinates contain NaN or infinity; ", *fix_parts)
     if F.min() < 0 or F.max() >= len(V):
-        raise MeshError(f"{name}: face indices out of range; {fix}")
+        raise MeshError(f"{name}: face indices out of range; ", *fix_parts)
     # Copies: manifold3d takes writable arrays only (a Solid's arrays are read-only).
     solid = manifold3d.Manifold(
         manifold3d.Mesh64(
@@ -67,10 +68,11 @@ def to_manifold(
     if status != manifold3d.Error.NoError or solid.is_empty():
         raise MeshError(
             f"{name}: manifold3d refuses it as a solid ({status.name}): it is not a closed "
-            f"manifold surface; {fix}"
+            "manifold surface; ",
+            *fix_parts,
         )
     if solid.volume() <= 0:
-        raise MeshError(f"{name} has non-positive volume (faces inward?); {fix}")
+        raise MeshError(f"{name} has non-positive volume (faces inward?); ", *fix_parts)
     return solid
 
 

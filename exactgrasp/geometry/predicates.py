@@ -2,7 +2,6 @@
 
 `orient` is the determinant of Shewchuk's orientation test evaluated in one fixed order, with
 the static error bound `orient_bound`: a sign whose magnitude exceeds the bound is certain.
-Imports numba and `exactgrasp.compiling` only.
 """
 
 from __future__ import annotations

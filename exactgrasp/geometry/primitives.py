@@ -98,20 +98,8 @@ def box(half_extents) -> tuple[np.ndarray, np.ndarray]:
 
 
 def sphere(radius: float, segments: int = 32) -> tuple[np.ndarray, np.ndarray]:
-    """UV sphere centred on the origin.
-
-    Parameters
-    ----------
-    radius : float
-        Sphere radius.
-    segments : int
-        Vertices around the equator; ``segments // 2`` latitude bands pole to pole.
-
-    Returns
-    -------
-    V : ndarray, shape (n, 3), float64
-    F : ndarray, shape (m, 3), int64
-    """
+    """UV sphere of ``radius`` centred on the origin: the `ellipsoid` of three equal radii
+    (``segments`` as there); returns its V (n, 3) float64 and F (m, 3) int64."""
     return ellipsoid((radius, radius, radius), segments)
 
 

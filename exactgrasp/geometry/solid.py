@@ -2,8 +2,7 @@
 
 Every mesh that enters the library goes through `Solid`, which refuses anything that is not a
 closed, consistently oriented surface of positive volume, with a message that names the input,
-the defect and the fix. Imports only `exactgrasp.errors`, other `exactgrasp.geometry` modules
-(`intake`, `shells`), numpy and trimesh.
+the defect and the fix.
 """
 
 from __future__ import annotations
@@ -18,7 +17,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from exactgrasp.errors import MeshError
+from exactgrasp.errors import Fix, MeshError
 from exactgrasp.geometry.intake import (
     MAX_PLAUSIBLE_SIZE_M,
     ORIENTATIONS,
@@ -30,14 +29,7 @@ from exactgrasp.geometry.intake import (
 from exactgrasp.geometry.shells import resolve_shells
 from exactgrasp.geometry.topology import EdgeDefects, drop_repeated_faces, edge_defects
 
-__all__ = [
-    "MAX_PLAUSIBLE_SIZE_M",
-    "ORIENTATIONS",
-    "UNITS",
-    "Solid",
-    "load_points",
-    "unit_scale",
-]
+__all__ = ["MAX_PLAUSIBLE_SIZE_M", "ORIENTATIONS", "UNITS", "Solid", "load_points", "unit_scale"]
 
 
 class Solid:
@@ -229,13 +221,15 @@ class Solid:
         if defects.open:
             raise MeshError(
                 f"{self.name}: not a closed surface ({defects.describe()}), so it has no "
-                "inside and no volume; pass repair=True to let trimesh and pymeshfix close it, "
-                "or fix the mesh in a modeller."
+                "inside and no volume; ",
+                Fix("repair", True, "pass"),
+                " to let trimesh and pymeshfix close it, or fix the mesh in a modeller.",
             )
         if defects.misoriented:
             raise MeshError(
-                f"{self.name}: triangles are not consistently oriented ({defects.describe()}); "
-                "pass repair=True to fix the winding."
+                f"{self.name}: triangles are not consistently oriented ({defects.describe()}); ",
+                Fix("repair", True, "pass"),
+                " to fix the winding.",
             )
 
     def _check_orientation(self, mesh: trimesh.Trimesh, orientation: str) -> trimesh.Trimesh:
@@ -259,9 +253,15 @@ class Solid:
         size = float(np.ptp(mesh.vertices, axis=0).max())
         if size > MAX_PLAUSIBLE_SIZE_M:
             raise MeshError(
-                f"{self.name}: {size:.4g} m long in units={units!r}, too large for a grasped "
-                "object or a hand; if the file is in millimetres pass units='mm' (or 'cm', "
-                "'inch'), or pass check_scale=False if this size is intended."
+                f"{self.name}: {size:.4g} m long in ",
+                Fix("units", units, "is"),
+                ", too large for a grasped object or a hand; if the file is in millimetres ",
+                Fix("units", "mm", "pass"),
+                " (or 'cm', 'inch')",
+                Fix(
+                    "check_scale", False, "pass", before=", or ", after=" if this size is intended"
+                ),
+                ".",
             )
 
     def _repair(self, mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -285,8 +285,10 @@ class Solid:
             actions.append("flipped inside-out surface")
         if not mesh.is_watertight or not mesh.is_winding_consistent:
             raise MeshError(
-                f"{self.name}: repair=True could not close the surface (after: {actions}); "
-                "fix the mesh in a modeller (e.g. MeshLab, Blender's 3D-print toolbox)."
+                f"{self.name}: ",
+                Fix("repair", True),
+                f" could not close the surface (after: {actions}); fix the mesh in a modeller "
+                "(e.g. MeshLab, Blender's 3D-print toolbox).",
             )
         actions = list(dict.fromkeys(actions))
         if actions:

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from exactgrasp.errors import MeshError, UncertainCrossingError
+from exactgrasp.errors import Fix, MeshError, UncertainCrossingError
 from exactgrasp.geometry.arrangement import winding_layers
 from exactgrasp.geometry.crossings import CROSS, UNSURE, find_crossings
 from exactgrasp.geometry.topology import (
@@ -84,8 +84,9 @@ def untangle(V: np.ndarray, F: np.ndarray, name: str):
     defects = edge_defects(V, G)
     if not defects.is_cycle:
         raise MeshError(
-            f"{name}: not a closed surface ({defects.describe()}), so it bounds no solid; "
-            "close it first (repair=True)."
+            f"{name}: not a closed surface ({defects.describe()}), so it bounds no solid; ",
+            Fix("repair", True, "pass"),
+            " to close it first.",
         )
     W = V
     if defects.nonmanifold:

@@ -4,7 +4,7 @@
 The point routine sums the solid angles of the triangles (van Oosterom and Strackee), O(faces)
 per point; the lattice routine sweeps columns of nodes and gives exact integer winding numbers
 of all nodes at once, O(crossings), with a symbolic perturbation on shared edges. Callers round
-as they need (``round(w) & 1``, ``abs(w) > 0.5``). Imports numpy and `exactgrasp.compiling` only.
+as they need (``round(w) & 1``, ``abs(w) > 0.5``).
 """
 
 from __future__ import annotations

@@ -10,8 +10,7 @@ mesh distances (coal or python-fcl BVHs, built once per link and per object), wi
 as the safety net, so no step passes through the object. See ``docs/closing.md``.
 
 This module holds the public API and the choice of closing joints, fingers and directions; the
-geometric engine is `exactgrasp.grasp.contact`. Imports `exactgrasp.errors`, `exactgrasp.geometry`
-(bvh, solid), `exactgrasp.hands.hand` and `exactgrasp.grasp` grasp and contact.
+geometric engine is `exactgrasp.grasp.contact`.
 """
 
 from __future__ import annotations
@@ -24,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import ClosingError, JointError, warn_caller
+from exactgrasp.errors import ClosingError, Fix, JointError, warn_caller
 from exactgrasp.geometry.bvh import DEFAULT_ENGINE, ENGINES
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.grasp import contact
@@ -43,6 +42,7 @@ __all__ = [
     "closing_directions",
 ]
 
+PASS_JOINTS = Fix("joints", form="pass", shown="[...]")
 #: A joint whose axis is within this angle of the palm normal spreads or twists the fingers
 #: (Barrett spread: 0 degrees) instead of flexing them (Barrett medial/distal: 90 degrees).
 SPREAD_AXIS_ANGLE = math.radians(45.0)
@@ -283,7 +283,7 @@ def close_grasp(grasp: Grasp, **options: Any) -> Grasp:
     try:
         result = close_fingers(grasp.hand, grasp.object, grasp.object_pose, **options)
     except (ClosingError, JointError) as exc:
-        raise type(exc)(f"grasp {grasp.name!r}: {exc}") from exc
+        raise exc.prefixed(f"grasp {grasp.name!r}: ") from exc
     return Grasp(result.hand, grasp.object, result.object_pose, name=grasp.name)
 
 
@@ -302,9 +302,9 @@ def _check_inputs(hand, obj, tolerance, step, engine) -> None:
         )
     for label, value, unit in (("tolerance", tolerance, "m"), ("step", step, "rad")):
         if isinstance(value, bool) or not isinstance(value, numbers.Real) or not value > 0:
-            raise ClosingError(f"{label} must be a positive number ({unit}), got {value!r}")
+            raise ClosingError(Fix(label), f" must be a positive number ({unit}), got {value!r}")
         if not math.isfinite(value):
-            raise ClosingError(f"{label} must be finite, got {value!r}")
+            raise ClosingError(Fix(label), f" must be finite, got {value!r}")
     if engine not in ENGINES:
         raise ClosingError(f"engine must be 'coal' or 'fcl', got {engine!r}")
 
@@ -317,7 +317,9 @@ def _closing_joints(hand: Hand, joints: Any) -> tuple[str, ...]:
         if normal is None:
             raise ClosingError(
                 f"{model.name} names no palm frame, so its flexion joints cannot be told from "
-                "its spread joints; pass joints=[...] (the joints that close the fingers)"
+                "its spread joints; ",
+                PASS_JOINTS,
+                " (the joints that close the fingers)",
             )
         frames, moves = model.joint_frames(hand.joints), _links_moved(model, hand.joint_names)
         chosen = tuple(
@@ -328,12 +330,14 @@ def _closing_joints(hand: Hand, joints: Any) -> tuple[str, ...]:
             and abs(frames[n][2] @ normal) < math.cos(SPREAD_AXIS_ANGLE)
         )
         if not chosen:
-            raise ClosingError(f"{model.name}: no limited flexion joint found; pass joints=[...]")
+            raise ClosingError(f"{model.name}: no limited flexion joint found; ", PASS_JOINTS)
         return chosen
     if isinstance(joints, str) or not all(isinstance(n, str) for n in joints):
         raise JointError(f"joints must be a list of joint names, got {joints!r}")
     if not joints:
-        raise JointError("joints is empty; name at least one joint to close, or pass None")
+        raise JointError(
+            Fix("joints"), " is empty; name at least one joint to close, or pass None"
+        )
     couplings = getattr(model, "couplings", {})
     for n in joints:
         if n in couplings:

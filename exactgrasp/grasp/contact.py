@@ -6,9 +6,6 @@ object pose; `backoff` moves the object out of an open hand that penetrates it; 
 closes one finger by conservative advancement on exact mesh distances, with bisection as the
 safety net, each joint in its direction (`infer_directions` when none is given). The public
 API is `exactgrasp.grasp.closing`.
-
-Imports `exactgrasp.errors`, `exactgrasp.cache`, `exactgrasp.geometry` (bvh, solid, winding)
-and `exactgrasp.hands.hand`.
 """
 
 from __future__ import annotations
@@ -18,7 +15,7 @@ import hashlib
 import numpy as np
 
 from exactgrasp.cache import LRUCache
-from exactgrasp.errors import ClosingError
+from exactgrasp.errors import ClosingError, Fix
 from exactgrasp.geometry.bvh import build_bvh, distance, require_engine
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.geometry.winding import winding_number
@@ -188,8 +185,9 @@ def backoff(
     if not allowed:
         raise ClosingError(
             f"the open hand penetrates {scene.obj.name} by {high * 1e3:.3f} mm along the palm "
-            f"normal (links {', '.join(stuck)}); pass backoff=True to move the object out by "
-            "that much, or move it yourself"
+            f"normal (links {', '.join(stuck)}); ",
+            Fix("backoff", True, "pass"),
+            " to move the object out by that much, or move it yourself",
         )
     clear(high)
     return high

@@ -3,22 +3,20 @@ and ``docs/grasp-file.md``).
 
 Errors from reading the object or the hand are re-raised as errors of the grasp file: naming
 it, the key concerned and the fix as the file spells it (``"object_repair": true``, not
-``repair=True``). Hands are read and written through `exactgrasp.hands.sources.HAND_SOURCES`.
-Imports `exactgrasp.errors`, `exactgrasp.geometry` (files, intake, solid), `exactgrasp.hands`
-(frame, hand, sources) and `exactgrasp.grasp.schema`; never `exactgrasp.grasp.grasp`.
+``repair=True``), from the fixes the errors carry (`exactgrasp.errors.Fix`), never from their
+text. Hands are read and written through `exactgrasp.hands.sources.HAND_SOURCES`.
 """
 
 from __future__ import annotations
 
-import ast
 import json
 import os
-import re
 from pathlib import Path
 from typing import Any
 
 from exactgrasp.errors import (
     ExactGraspError,
+    Fix,
     FrameError,
     GraspFileError,
     JointError,
@@ -36,7 +34,7 @@ from exactgrasp.hands.sources import HAND_SOURCES, source_for
 __all__ = [
     "HAND_KEYS",
     "OBJECT_KEYS",
-    "file_spelling",
+    "file_terms",
     "read_hand",
     "read_object",
     "write_hand",
@@ -45,95 +43,88 @@ __all__ = [
 
 # -- the file's spelling of a fix -------------------------------------------------------------
 
-_LITERAL = r"""'[^']*'|"[^"]*"|True|False|None|-?\d[\w.+-]*|\[[^\]]*\]|\{[^}]*\}"""
+#: How a grasp file sets what the Python API's ``frame=`` does.
+FRAME_FIX = (
+    'give "hand_frame": {"origin": [x, y, z], "normal": [x, y, z], "up": [x, y, z], '
+    '"depth": d} (the paper\'s frame) or "hand_frame": {"identity": true} in the grasp file'
+)
 
 
-def _json_text(key: str, value: str | None) -> str:
-    if value is None:
-        shown = "..."
-    else:
-        try:
-            shown = json.dumps(ast.literal_eval(value))
-        except (ValueError, SyntaxError):
-            shown = value
+def _key_value(key: str, value: str) -> str:
+    """``"a": {"b": value}`` for the dotted key ``a.b``."""
     *outer, last = key.split(".")
-    text = f"{json.dumps(last)}: {shown}"
+    text = f"{json.dumps(last)}: {value}"
     for name in reversed(outer):
         text = f"{json.dumps(name)}: {{{text}}}"
     return text
 
 
-def file_spelling(message: str, keys: dict[str, str]) -> str:
-    """A library message with Python arguments (``repair=True``) spelled as grasp-file keys.
+def file_terms(fix: Fix) -> str | None:
+    """A fix as a grasp file spells it: the key that sets it, when the reader recorded one.
 
     Parameters
     ----------
-    message : str
-    keys : dict of str to str
-        Python argument name -> the grasp-file key that sets it (dotted when nested, e.g.
-        ``{"repair": "hand_options.repair"}``).
+    fix : Fix
+        Its `Fix.file_key` set by the reader (`read_object`, `read_hand`); None keeps the
+        Python spelling, ``""`` (a Python-only escape hatch) drops the fix.
 
     Returns
     -------
-    str
-        ``pass repair=True`` becomes ``set "object_repair": true in the grasp file`` (for
-        ``{"repair": "object_repair"}``), a bare ``repair=True`` becomes
-        ``"object_repair": true``.
+    str or None
+        ``pass repair=True`` is ``set "object_repair": true in the grasp file`` (for the key
+        ``object_repair``), a bare ``repair=True`` is ``"object_repair": true``, the place of
+        ``units`` is ``"object_units" in the grasp file``.
     """
-    if not keys:
-        return message
-    names = "|".join(re.escape(name) for name in sorted(keys, key=len, reverse=True))
-    # Not inside a call's arguments: "Solid(repair=True) does" stays as it is.
-    pattern = re.compile(rf"(?<![(\w.])(?<!, )(?:([Pp])ass )?({names})=({_LITERAL})?")
+    key = fix.file_key
+    if key == "":
+        return None
+    if key == "hand_frame":
+        return FRAME_FIX
+    if key is None or (fix.value is ... and fix.shown is None and fix.form != "where"):
+        return fix.in_python()
+    if fix.form == "where":
+        return f"{json.dumps(key)} in the grasp file"
+    if fix.python is not None:
+        return fix.python
+    shown = json.dumps(fix.value) if fix.shown is None else fix.shown or "..."
+    text = _key_value(key, shown)
+    if fix.form in ("pass", "Pass"):
+        return f"{'S' if fix.form == 'Pass' else 's'}et {text} in the grasp file"
+    return text
 
-    def spell(match: re.Match) -> str:
-        text = _json_text(keys[match.group(2)], match.group(3))
-        if match.group(1):
-            return f"{'S' if match.group(1) == 'P' else 's'}et {text} in the grasp file"
-        return text
 
-    return pattern.sub(spell, message)
-
-
+#: Settings of the Python API that no grasp-file key reaches, and the frame, which has its
+#: own key: the same for every part of the file.
+COMMON_KEYS = {"check_scale": "", "frame": "hand_frame"}
 #: The grasp-file key behind each Python argument, by the part of the file being read.
 OBJECT_KEYS = {
     "repair": "object_repair",
     "units": "object_units",
     "surface_samples": "object_surface_samples",
+    **COMMON_KEYS,
 }
 JOINT_KEYS = {"on_limit": "on_limit", "joints": "joints"}
 _MODEL_OPTIONS = schema_dict()["properties"]["hand_options"]["properties"]
 HAND_KEYS = {
-    "model": {**{k: f"hand_options.{k}" for k in _MODEL_OPTIONS}, **JOINT_KEYS},
+    "model": {**{k: f"hand_options.{k}" for k in _MODEL_OPTIONS}, **JOINT_KEYS, **COMMON_KEYS},
     "builtin": {
         "distal_coupling": "hand.options.distal_coupling",
         "tessellation": "hand.options.tessellation",
         **JOINT_KEYS,
+        **COMMON_KEYS,
     },
-    "file": {"repair": "hand.repair", "units": "hand.units"},
-    "meshes": {},
+    "file": {"repair": "hand.repair", "units": "hand.units", **COMMON_KEYS},
+    "meshes": dict(COMMON_KEYS),
 }
 #: The key an error of each hand kind is about.
 HAND_KEY = {"model": "hand_model", "builtin": "hand", "file": "hand", "meshes": "hand"}
-_NO_FRAME = re.compile(r"pass frame=.*$")
-# Python-only escape hatches that no grasp-file key reaches.
-_PYTHON_ONLY = re.compile(r",? or pass check_scale=False[^.;]*")
 
 
 def _as_file_error(exc: ExactGraspError, source: str, key: str, keys: dict) -> ExactGraspError:
-    """``exc`` re-raised for a grasp file: naming ``key``, fixes spelled as file keys."""
-    message = _PYTHON_ONLY.sub("", file_spelling(str(exc), keys))
-    if isinstance(exc, FrameError):
-        frame = '{"origin": [x, y, z], "normal": [x, y, z], "up": [x, y, z], "depth": d}'
-        message = _NO_FRAME.sub(
-            f'give "hand_frame": {frame} (the paper\'s frame) or "hand_frame": '
-            '{"identity": true} in the grasp file.',
-            message,
-        )
-    if isinstance(exc, JointError):
-        # Joint errors keep their class: callers (batch reports) sort failures by it.
-        return JointError(f"{source}: {key}: {message}")
-    return GraspFileError(f"{source}: {key}: {message}")
+    """``exc`` for a grasp file: naming ``key``, its fixes spelled as file keys."""
+    # Joint errors keep their class: callers (batch reports) sort failures by it.
+    cls = JointError if isinstance(exc, JointError) else GraspFileError
+    return exc.respelled(file_terms, f"{source}: {key}: ", keys=keys, cls=cls)
 
 
 # -- reading and writing ---------------------------------------------------------------------
@@ -181,7 +172,7 @@ def read_hand(data: dict, base_dir: Path, source: str, overrides: dict) -> Hand:
     try:
         frame = HandFrame.from_dict(data["hand_frame"]) if data.get("hand_frame") else None
     except FrameError as exc:
-        raise GraspFileError(f"{source}: hand_frame: {exc}") from exc
+        raise _as_file_error(exc, source, "hand_frame", COMMON_KEYS) from exc
     spec = data.get("hand")
     kind = "model" if spec is None else spec.get("type")
     if kind not in HAND_SOURCES:

@@ -6,9 +6,6 @@ relative to the file, ``object_units``, ``object_pose_in_hand`` from object metr
 coordinates, ``joints``) and those written here (``format``, ``hand`` for hands that are not a
 model file, ``hand_options``, ``hand_frame``). Files are checked against the schema before
 anything is read.
-
-Imports `exactgrasp.errors`, `exactgrasp.geometry` (se3, solid), `exactgrasp.hands` (frame,
-hand) and `exactgrasp.grasp` files and schema.
 """
 
 from __future__ import annotations
@@ -22,10 +19,17 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import GraspFileError
+from exactgrasp.errors import Fix, GraspError, GraspFileError
 from exactgrasp.geometry.se3 import rigid_defect
 from exactgrasp.geometry.solid import Solid
-from exactgrasp.grasp.files import read_hand, read_object, write_hand, write_object
+from exactgrasp.grasp.files import (
+    OBJECT_KEYS,
+    file_terms,
+    read_hand,
+    read_object,
+    write_hand,
+    write_object,
+)
 from exactgrasp.grasp.schema import check_grasp_data
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.hand import Hand
@@ -39,9 +43,7 @@ FORMAT = "exactgrasp.grasp/1"
 POSE_ATOL = 1e-5
 
 
-def check_pose(
-    pose: Any, name: str = "object_pose", units: str = "Solid(..., units=...)"
-) -> np.ndarray:
+def check_pose(pose: Any, name: str = "object_pose") -> np.ndarray:
     """Validate a rigid 4x4 transform.
 
     Parameters
@@ -49,9 +51,6 @@ def check_pose(
     pose : array_like, shape (4, 4)
     name : str
         Used in the message.
-    units : str
-        Where the caller sets the object's length unit, for the message (a scale belongs
-        there, not in the pose).
 
     Returns
     -------
@@ -59,16 +58,18 @@ def check_pose(
     """
     arr = np.array(pose, dtype=np.float64)  # a copy: the caller's array may change later
     if arr.shape != (4, 4):
-        raise GraspFileError(f"{name} must be a 4x4 matrix, got shape {arr.shape}.")
+        raise GraspError(f"{name} must be a 4x4 matrix, got shape {arr.shape}.")
     if not np.all(np.isfinite(arr)):
-        raise GraspFileError(f"{name} contains NaN or infinite entries.")
+        raise GraspError(f"{name} contains NaN or infinite entries.")
     what = rigid_defect(arr, POSE_ATOL)
     if what is not None:
-        raise GraspFileError(
+        raise GraspError(
             f"{name} is not a rigid transform: {what}. Give a rotation (orthonormal, "
             f"determinant +1, to {POSE_ATOL:g}) and a translation in metres, last row 0 0 0 1; "
-            f"a mesh in other units takes {units}, not a scale in the pose, and a mirrored "
-            "object a mirrored mesh."
+            "a mesh in other units takes ",
+            # Where the object's length unit is set: a scale belongs there, not in the pose.
+            Fix("units", form="where", python="Solid(..., units=...)"),
+            ", not a scale in the pose, and a mirrored object a mirrored mesh.",
         )
     return arr
 
@@ -88,9 +89,9 @@ class Grasp:
 
     def __init__(self, hand: Hand, object: Solid, object_pose: Any = None, name: str = ""):
         if not isinstance(hand, Hand):
-            raise GraspFileError(f"hand must be an exactgrasp Hand, got {type(hand).__name__}.")
+            raise GraspError(f"hand must be an exactgrasp Hand, got {type(hand).__name__}.")
         if not isinstance(object, Solid):
-            raise GraspFileError(
+            raise GraspError(
                 f"object must be an exactgrasp Solid, got {type(object).__name__}; wrap meshes "
                 "with Solid.from_trimesh or Solid.from_file."
             )
@@ -223,11 +224,10 @@ class Grasp:
         check_grasp_data(data, source)
         obj = read_object(data, base_dir, source, overrides)
         hand = read_hand(data, base_dir, source, overrides)
-        pose = check_pose(
-            data["object_pose_in_hand"],
-            f"{source}: object_pose_in_hand",
-            units='"object_units" in the grasp file',
-        )
+        try:
+            pose = check_pose(data["object_pose_in_hand"], f"{source}: object_pose_in_hand")
+        except GraspError as exc:
+            raise exc.respelled(file_terms, keys=OBJECT_KEYS, cls=GraspFileError) from exc
         return cls(hand, obj, pose, name=data.get("name", Path(source).stem))
 
     def to_dict(self, base_dir: str | os.PathLike = ".", sidecar_stem: str = "grasp") -> dict:

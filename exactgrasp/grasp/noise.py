@@ -2,7 +2,7 @@
 
 Both are seeded: the same ``rng`` seed gives the same perturbations on every machine. The one
 public noise module: `joint_noise` lives in `exactgrasp.hands.noise` (a hand operation) and is
-re-exported. Imports `exactgrasp.errors`, `exactgrasp.hands.noise`, numpy and scipy.
+re-exported.
 """
 
 from __future__ import annotations

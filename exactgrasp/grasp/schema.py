@@ -6,7 +6,7 @@ The schema is the one list of the keys of a grasp file, their types and meanings
 uses (type, const, enum, minimum, properties, required, dependentRequired, patternProperties,
 additionalProperties, items, prefixItems, min/maxItems, anyOf, oneOf, $ref), so an unknown key,
 a missing one or a wrong type is refused naming the file and the key, without a JSON Schema
-package. Imports only `exactgrasp.errors` and numpy.
+package.
 """
 
 from __future__ import annotations

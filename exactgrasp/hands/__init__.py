@@ -17,9 +17,6 @@ from exactgrasp.hands.loading import load_model
 from exactgrasp.hands.model import KinematicModel
 from exactgrasp.hands.palm import PalmSpec
 
-#: The old name of `get_builtin`.
-get = get_builtin
-
 __all__ = [
     "BUILTIN_HANDS",
     "JOINT_LIMIT_TOL",
@@ -32,7 +29,6 @@ __all__ = [
     "available_hands",
     "barrett",
     "barrett_model",
-    "get",
     "get_builtin",
     "load_model",
     "parallel_gripper",

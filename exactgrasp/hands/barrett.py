@@ -20,8 +20,6 @@ turn in opposite senses), so the user-facing spread joint is ``finger_1_prox_joi
 that also sets ``finger_2_prox_joint`` is accepted when both agree. The distal joints are
 independent by default, since the real hand's 12/35 distal/medial coupling breaks away on
 contact; ``distal_coupling=True`` couples them.
-
-Imports `exactgrasp.cache` and `exactgrasp.hands` hand, loading and model.
 """
 
 from __future__ import annotations

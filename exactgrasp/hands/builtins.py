@@ -1,7 +1,4 @@
-"""The built-in hands by name (the ``"builtin"`` hand type of grasp files).
-
-Imports `exactgrasp.errors` and the built-in hand modules of `exactgrasp.hands`.
-"""
+"""The built-in hands by name (the ``"builtin"`` hand type of grasp files)."""
 
 from __future__ import annotations
 

@@ -4,8 +4,6 @@ Origin half-way along the palm normal between the palm and the outside of the lo
 fingers; axes: z "out" of the palm, y "up" towards the enclosing finger(s), x = y × z; scaled
 so that half the palm-to-fingertip depth ``d`` is 1. Paths of length 1 then take the object out
 of the hand, whatever the hand's size.
-
-Imports only `exactgrasp.errors` and numpy.
 """
 
 from __future__ import annotations
@@ -115,14 +113,14 @@ class HandFrame:
         """Inverse of `to_dict`; also reads the shared data's ``palm_frame.json`` schema."""
         if data.get("identity"):
             return cls.identity()
-        try:
-            return cls.from_palm(
-                data["origin"], data["normal"], data["up"], data["depth"], data.get("scale")
-            )
-        except KeyError as exc:
+        missing = [key for key in ("origin", "normal", "up", "depth") if key not in data]
+        if missing:
             raise FrameError(
-                f"a palm frame needs origin, normal, up and depth; {exc.args[0]!r} is missing."
-            ) from None
+                f"a palm frame needs origin, normal, up and depth; {missing[0]!r} is missing."
+            )
+        return cls.from_palm(
+            data["origin"], data["normal"], data["up"], data["depth"], data.get("scale")
+        )
 
     def to_dict(self) -> dict:
         """JSON-serialisable form."""

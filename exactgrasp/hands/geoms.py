@@ -1,9 +1,7 @@
 """Geoms of a compiled MuJoCo model as closed meshes: type codes, welding, `collect_geoms`.
 
 With ``repair=True`` a mesh geom that is not a closed solid is repaired as
-`exactgrasp.geometry.solid.Solid` repairs a mesh (``Solid(repair=True)``). Imports
-`exactgrasp.errors`, `exactgrasp.geometry` (primitives, shells, solid), numpy and scipy;
-nothing else of `exactgrasp.hands`.
+`exactgrasp.geometry.solid.Solid` repairs a mesh (``Solid(repair=True)``).
 """
 
 from __future__ import annotations
@@ -16,7 +14,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from exactgrasp.cache import DiskCache
-from exactgrasp.errors import MeshError, ModelError, warn_caller
+from exactgrasp.errors import Fix, MeshError, ModelError, warn_caller
 from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
 from exactgrasp.geometry.solid import Solid
@@ -158,9 +156,10 @@ def _weld(V, F, what, repairs, resolved):
             return repair_mesh(V, F, what, repairs)
         raise ModelError(
             f"{what} is not a closed surface, even after merging duplicate vertices "
-            f"({defects.describe()}); pass repair=True (to load_model, Hand.from_mjcf or "
-            "Hand.from_urdf) to close it as Solid(repair=True) does, repair the mesh file, or "
-            "use a primitive geom instead"
+            f"({defects.describe()}); ",
+            Fix("repair", True, "pass"),
+            " (to load_model, Hand.from_mjcf or Hand.from_urdf) to close it as "
+            "Solid(repair=True) does, repair the mesh file, or use a primitive geom instead",
         )
     try:
         # Once per mesh asset, at compile time: posing moves links rigidly, so a resolved
@@ -173,7 +172,7 @@ def _weld(V, F, what, repairs, resolved):
             warn=warn_caller if resolved is None else resolved.append,
         )
     except MeshError as exc:
-        raise ModelError(str(exc)) from None
+        raise ModelError(*exc.parts) from exc
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     if np.einsum("ij,ij->", a, np.cross(b, c)) < 0:
         warn_caller(f"{what} is inside-out (negative volume); its faces were flipped")
@@ -207,7 +206,7 @@ def repair_mesh(
         try:
             solid = Solid(V, F, name=what, repair=True, check_scale=False)
         except MeshError as exc:
-            raise ModelError(f"{exc} (with repair=True)") from None
+            raise ModelError(*exc.parts, " (with ", Fix("repair", True), ")") from exc
     for w in caught:  # the repair itself is reported once, below; shell notes pass on
         if not str(w.message).startswith(f"{what}: repaired"):
             warn_caller(str(w.message))
@@ -263,17 +262,15 @@ def collect_geoms(
     tessellation: int,
     source: str,
     *,
-    repair: bool = False,
+    repair: bool,
 ) -> tuple[list[tuple[str, int, np.ndarray, np.ndarray]], tuple[str, ...]]:
     """The hand's geoms as closed meshes in their own frames.
 
     Parameters
     ----------
-    mj_model : mujoco.MjModel
-    in_tree : numpy.ndarray, shape (nbody,) bool
-        Bodies in the hand's subtree.
-    root : int
-        The hand's root body.
+    mj_model, in_tree, root
+        The compiled model, the bodies of the hand's subtree (nbody,) bool and its root body,
+        as `exactgrasp.hands.joints.collect_joints` takes them.
     body_names : list of str
         Name of every body, by id.
     geometry : {"collision", "visual", "all"}
@@ -318,17 +315,24 @@ def collect_geoms(
         warn_caller(f"{source}: geoms left out of the hand: " + "; ".join(notes))
     if not kept:
         if other:
-            hint = f"; {other} geom(s) of the other kind exist: try geometry='all'"
+            hint: tuple = (
+                f"; {other} geom(s) of the other kind exist: try ",
+                Fix("geometry", "all"),
+            )
         elif root or outside:
-            hint = "; pass root_body= naming the body whose subtree holds the hand's geoms"
+            hint = (
+                "; ",
+                Fix("root_body", form="pass", shown=""),
+                " naming the body whose subtree holds the hand's geoms",
+            )
         else:
             hint = (
                 "; the model has no solid geom (box, sphere, capsule, cylinder, ellipsoid or "
-                "mesh): add the hand's geoms to the model file"
+                "mesh): add the hand's geoms to the model file",
             )
         raise ModelError(
-            f"{source}: no {geometry} geometry in the hand's subtree "
-            f"(root {body_names[root]!r}){hint}"
+            f"{source}: no {geometry} geometry in the hand's subtree (root {body_names[root]!r})",
+            *hint,
         )
     per_body: dict[int, list[int]] = {}
     for g in kept:

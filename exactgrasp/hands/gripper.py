@@ -14,8 +14,6 @@ user-facing joint.
 * limits: 0 .. 0.04 m per finger; the default pose is open (q = 0.04, a 0.08 m gap);
 * palm frame from the site ``palm_face``: origin (0, 0, 0), normal +z, up +y, depth 0.05 m
   (the finger length).
-
-Imports `exactgrasp.cache` and `exactgrasp.hands` hand, loading and model.
 """
 
 from __future__ import annotations

@@ -4,9 +4,6 @@ A `Hand` wraps a hand model (a `RigidModel` of fixed meshes, or an MJCF/URDF mod
 mujoco, see `exactgrasp.hands.model`) at one joint configuration, with its `HandFrame`. Its volume
 is the volume of the UNION of its links: real link meshes overlap and an overlap is hand once.
 `HandModel` is what a Hand needs of its model.
-
-Imports `exactgrasp.errors`, `exactgrasp.geometry` (manifold, solid) and `exactgrasp.hands`
-frame, loading and noise.
 """
 
 from __future__ import annotations
@@ -21,7 +18,7 @@ from typing import Any, Protocol
 import numpy as np
 import trimesh
 
-from exactgrasp.errors import FrameError, JointError, MeshError
+from exactgrasp.errors import Fix, FrameError, JointError, MeshError
 from exactgrasp.geometry.manifold import union_volume
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.hands.frame import HandFrame
@@ -111,8 +108,14 @@ class Hand:
             palm = getattr(model, "palm", None)
             if palm is None:
                 raise FrameError(
-                    f"{model.name} names no palm frame; pass frame=HandFrame.from_palm(origin, "
-                    "normal, up, depth) (the paper's frame) or frame=HandFrame.identity()."
+                    f"{model.name} names no palm frame; ",
+                    Fix(
+                        "frame",
+                        form="pass",
+                        python="pass frame=HandFrame.from_palm(origin, normal, up, depth) "
+                        "(the paper's frame) or frame=HandFrame.identity()",
+                    ),
+                    ".",
                 )
             frame = _frame_from_palm(palm)
         if not isinstance(frame, HandFrame):
@@ -185,7 +188,7 @@ class Hand:
             raise MeshError("from_meshes needs at least one link mesh, got none.")
         names = list(names) if names is not None else [f"link{i}" for i in range(len(meshes))]
         if len(names) != len(meshes):
-            raise JointError(f"{len(names)} names for {len(meshes)} meshes; give one per mesh.")
+            raise MeshError(f"{len(names)} names for {len(meshes)} meshes; give one per mesh.")
         links = [
             (name, _as_solid(mesh, units, name)) for name, mesh in zip(names, meshes, strict=True)
         ]

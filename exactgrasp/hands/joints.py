@@ -1,7 +1,4 @@
-"""Joints of a compiled MuJoCo hand: limit tolerances, couplings and `collect_joints`.
-
-Imports `exactgrasp.errors`, `exactgrasp.hands.geoms` (joint type codes) and numpy.
-"""
+"""Joints of a compiled MuJoCo hand: limit tolerances, couplings and `collect_joints`."""
 
 from __future__ import annotations
 

@@ -5,8 +5,7 @@ welded, closed mesh and the palm frame resolved into hand coordinates; `load_mod
 keeps the last compiled models while their files are unchanged.
 
 Mesh URIs (``package://``, ``model://``) are resolved before MuJoCo reads the file
-(`exactgrasp.hands.packages`). Imports `exactgrasp.errors`, `exactgrasp.cache`,
-`exactgrasp.geometry.files` and `exactgrasp.hands` frame, model, packages and palm.
+(`exactgrasp.hands.packages`).
 """
 
 from __future__ import annotations

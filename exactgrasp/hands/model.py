@@ -7,8 +7,7 @@ returned in the frame of the hand's root body (the URDF base link, or ``root_bod
 where the hand stands in a scene file does not matter. Build one with
 `exactgrasp.hands.loading.load_model`.
 
-Imports `exactgrasp.errors`, `exactgrasp.hands` geoms, joints, palm and scene, numpy; mujoco is
-loaded on first use (it is a core dependency, but importing exactgrasp stays light).
+mujoco is loaded on first use (a core dependency, but importing exactgrasp stays light).
 """
 
 from __future__ import annotations
@@ -18,7 +17,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from exactgrasp.errors import JointError, ModelError, warn_caller
+from exactgrasp.errors import Fix, JointError, ModelError, warn_caller
 from exactgrasp.hands.geoms import JOINT_SLIDE, collect_geoms
 from exactgrasp.hands.joints import collect_joints
 from exactgrasp.hands.palm import PalmSpec
@@ -54,7 +53,7 @@ class KinematicModel:
         geometry,
         tessellation,
         couplings,
-        repair=False,
+        repair,
     ):
         import mujoco  # here, not at the top: importing exactgrasp stays light
 
@@ -127,7 +126,9 @@ class KinematicModel:
             if on_limit == "error":
                 raise JointError(
                     f"joint {n!r} = {v!r} is outside its limits [{lo}, {hi}] "
-                    f"(tolerance {slack:g}); pass on_limit='clip' to clip it"
+                    f"(tolerance {slack:g}); ",
+                    Fix("on_limit", "clip", "pass"),
+                    " to clip it",
                 )
             out[n] = min(max(v, lo), hi)
             clipped.append(f"{n}: {v!r} -> {out[n]!r}")

@@ -1,7 +1,6 @@
 """The paper's joint noise (section IV-A) and the seeded random helpers the noise models share.
 
-Seeded: the same ``rng`` seed gives the same perturbations on every machine. Imports only
-`exactgrasp.errors` and numpy (the hand is read through its attributes, not imported).
+Seeded: the same ``rng`` seed gives the same perturbations on every machine.
 """
 
 from __future__ import annotations

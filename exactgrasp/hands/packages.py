@@ -7,8 +7,6 @@ folder, or folders holding packages), then the ``ROS_PACKAGE_PATH`` environment 
 file's own folder and its parents. A folder is package NAME when its ``package.xml`` says so
 or when it is named NAME. `rewrite_urdf` and `rewrite_spec` replace the URIs of a model by
 absolute paths before MuJoCo compiles it.
-
-Imports `exactgrasp.errors` only (and the standard library).
 """
 
 from __future__ import annotations
@@ -20,7 +18,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from exactgrasp.errors import ModelError
+from exactgrasp.errors import Fix, ModelError
 
 __all__ = [
     "ENV_PATHS",
@@ -97,24 +95,29 @@ class PackageResolver:
             pass
         elif isinstance(package_dirs, Mapping):
             for name, folder in package_dirs.items():
-                self.named[str(name)] = self._folder(folder, f"package_dirs[{name!r}]")
+                entry = Fix(
+                    "package_dirs", {name: folder}, "entry", python=f"package_dirs[{name!r}]"
+                )
+                self.named[str(name)] = self._folder(folder, entry)
         elif isinstance(package_dirs, str | os.PathLike):
-            self.roots.append(self._folder(package_dirs, "package_dirs"))
+            self.roots.append(self._folder(package_dirs, Fix("package_dirs", form="entry")))
         elif isinstance(package_dirs, Iterable):
-            self.roots += [self._folder(f, "package_dirs entry") for f in package_dirs]
+            entry = Fix("package_dirs", form="entry", python="package_dirs entry")
+            self.roots += [self._folder(f, entry) for f in package_dirs]
         else:
             raise ModelError(
-                "package_dirs must be a dict {package name: folder} or a list of folders "
-                f"holding packages, got {type(package_dirs).__name__}"
+                Fix("package_dirs"),
+                " must be a dict {package name: folder} or a list of folders "
+                f"holding packages, got {type(package_dirs).__name__}",
             )
         self._scans: dict[Path, dict[str, Path]] = {}
 
-    def _folder(self, folder: Any, what: str) -> Path:
+    def _folder(self, folder: Any, what: Fix) -> Path:
         if not isinstance(folder, str | os.PathLike):
-            raise ModelError(f"{what}: expected a folder path, got {folder!r}")
+            raise ModelError(what, f": expected a folder path, got {folder!r}")
         path = Path(folder).expanduser()
         if not path.is_dir():
-            raise ModelError(f"{self.source}: {what} {str(folder)!r} is not a folder")
+            raise ModelError(f"{self.source}: ", what, f" {str(folder)!r} is not a folder")
         return path.resolve()
 
     def _scan(self, root: Path) -> dict[str, Path]:
@@ -183,7 +186,7 @@ class PackageResolver:
                     return found
         if found := self._fallback(name, inside, hit):
             return found
-        raise ModelError(self._message(full, name, inside, env, tried))
+        raise ModelError(*self._message(full, name, inside, env, tried))
 
     def _fallback(self, name: str, inside: str, hit) -> Path | None:
         """The model's folder and its parents: a package.xml naming the package, a folder
@@ -201,7 +204,7 @@ class PackageResolver:
                 return (folder / inside).resolve()
         return None
 
-    def _message(self, full: str, name: str, inside: str, env, tried: list[str]) -> str:
+    def _message(self, full: str, name: str, inside: str, env, tried: list[str]) -> tuple:
         given = (
             ", ".join(
                 [f"{k!r}: {str(v)!r}" for k, v in self.named.items()]
@@ -214,10 +217,13 @@ class PackageResolver:
         found = f" ({'; '.join(dict.fromkeys(tried))})" if tried else ""
         return (
             f"{self.source}: cannot resolve mesh {full!r}: no package {name!r} holding "
-            f"{inside} was found{found}. "
-            f"Searched package_dirs ({given}); {env_text}; the model's folder and its "
-            f"parents ({parents}). Pass package_dirs={{{name!r}: '/path/to/{name}'}} "
-            "or package_dirs=['/folder/holding/packages'], or set ROS_PACKAGE_PATH."
+            f"{inside} was found{found}. Searched ",
+            Fix("package_dirs"),
+            f" ({given}); {env_text}; the model's folder and its parents ({parents}). ",
+            Fix("package_dirs", {name: f"/path/to/{name}"}, "Pass"),
+            " or ",
+            Fix("package_dirs", ["/folder/holding/packages"]),
+            ", or set ROS_PACKAGE_PATH.",
         )
 
 

@@ -1,7 +1,4 @@
-"""Palm frames of hand models: `PalmSpec` and turning a palm description into one.
-
-Imports `exactgrasp.errors` and numpy only.
-"""
+"""Palm frames of hand models: `PalmSpec` and turning a palm description into one."""
 
 from __future__ import annotations
 

@@ -7,8 +7,6 @@ are refused with the candidates listed. A body with a free joint is a loose obje
 hand link unless it is the hand's own root. `body_tree` lists bodies, joints, geoms and sites
 (the ``exactgrasp inspect`` command), so that ``root_body``, the palm frame and the closing
 joints can be chosen without reading the XML.
-
-Imports `exactgrasp.errors`, `exactgrasp.hands.geoms` (type codes) and numpy.
 """
 
 from __future__ import annotations
@@ -18,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from exactgrasp.errors import ModelError, warn_caller
+from exactgrasp.errors import Fix, ModelError, warn_caller
 from exactgrasp.hands.geoms import (
     GEOM_HFIELD,
     GEOM_KIND,
@@ -139,10 +137,11 @@ def hand_subtree(
         if len(found) > 1:
             raise ModelError(
                 f"{source}: {len(found)} top-level bodies carry {geometry} geometry, so the "
-                "model is a scene and which of them is the hand is not known; pass "
-                "root_body= the hand's root body. Candidates, the most hand-like first: "
+                "model is a scene and which of them is the hand is not known; ",
+                Fix("root_body", form="pass", shown=""),
+                " the hand's root body. Candidates, the most hand-like first: "
                 + "; ".join(c.describe() for c in found)
-                + ". (Run `exactgrasp inspect` on the model to see its body tree.)"
+                + ". (Run `exactgrasp inspect` on the model to see its body tree.)",
             )
         root = 0
     elif root_body in names:

@@ -4,9 +4,6 @@ A grasp file names its hand as a model file (``hand_model``, the shared Barrett 
 as ``hand: {"type": kind, ...}`` with kind ``"builtin"``, ``"file"`` or ``"meshes"``. Each
 kind is one `HandSource` that reads such a hand and writes one back (`source_for` picks the
 writer from ``Hand.source``; hands built in memory are written as link meshes).
-
-Imports `exactgrasp.errors`, `exactgrasp.geometry` (files, solid) and `exactgrasp.hands`
-builtins, frame and hand.
 """
 
 from __future__ import annotations

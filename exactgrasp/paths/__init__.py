@@ -1,7 +1,4 @@
-"""Rigid-body paths out of the hand: the sampler, its presets and the one input coercion.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry`; nothing above the paths layer.
-"""
+"""Rigid-body paths out of the hand: the sampler, its presets and the one input coercion."""
 
 from exactgrasp.errors import SamplerError
 from exactgrasp.paths.presets import DEFAULT_PRESET, as_sampler

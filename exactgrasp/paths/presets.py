@@ -4,8 +4,6 @@ Every entry point (``compute_descriptor``, ``compare_backends``, ``run_batch`` a
 command line) goes through `as_sampler`, so they accept the same forms and fail with the same
 message. The preset table itself, `PRESETS`, lives beside `PathSampler.preset` in
 `exactgrasp.paths.sampler` (this module imports that one, never the reverse).
-
-May import: `exactgrasp.errors`, `exactgrasp.paths.sampler`.
 """
 
 from __future__ import annotations
@@ -16,7 +14,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from exactgrasp.errors import SamplerError
+from exactgrasp.errors import Fix, SamplerError
 from exactgrasp.paths.sampler import PRESETS, PathSampler
 
 __all__ = ["DEFAULT_PRESET", "PRESETS", "SAMPLER_PARAMETERS", "accepted_forms", "as_sampler"]
@@ -29,13 +27,24 @@ SAMPLER_PARAMETERS = tuple(inspect.signature(PathSampler.__init__).parameters)[1
 
 
 def accepted_forms() -> str:
-    """What `as_sampler` accepts, in words (ends its error messages)."""
+    """What `as_sampler` accepts, in words (ends its error messages, as `FORMS`)."""
     return (
         f"give None (the {DEFAULT_PRESET!r} preset), a PathSampler, a preset name "
         f"({', '.join(sorted(PRESETS))}), a dict of PathSampler parameters "
         f"({', '.join(SAMPLER_PARAMETERS)}), the JSON text of one or the path of a .json "
         "file holding it"
     )
+
+
+def _subject(value: Any, kind: str = "sampler") -> Fix:
+    """The sampler a message is about (``sampler '...': ``), which a front end may name its
+    own way."""
+    return Fix("sampler", value, "subject", python=f"{kind} {value!r}: ")
+
+
+def _forms() -> Fix:
+    """The accepted forms, as a fix of ``sampler`` (a front end words its own forms)."""
+    return Fix("sampler", form="forms", python=accepted_forms())
 
 
 def as_sampler(value: Any = None, n_steps: int | None = None) -> PathSampler:
@@ -69,17 +78,20 @@ def as_sampler(value: Any = None, n_steps: int | None = None) -> PathSampler:
         try:
             value = file.read_text()
         except OSError as exc:
-            raise SamplerError(f"sampler file {str(file)!r}: cannot be read ({exc}).") from exc
+            raise SamplerError(
+                _subject(str(file), "sampler file"), f"cannot be read ({exc})."
+            ) from exc
         if not value.lstrip().startswith("{"):
             raise SamplerError(
-                f"sampler file {str(file)!r}: not a JSON object; {accepted_forms()}."
+                _subject(str(file), "sampler file"), "not a JSON object; ", _forms(), "."
             )
     if isinstance(value, PathSampler):
         if n_steps is not None and n_steps != value.n_steps:
             raise SamplerError(
-                f"n_steps={n_steps!r} cannot change the sampler {value!r}, which is already "
-                f"built with n_steps={value.n_steps}; pass its parameters (a dict) or a preset "
-                "name instead."
+                Fix("n_steps", n_steps),
+                f" cannot change the sampler {value!r}, which is already built with ",
+                Fix("n_steps", shown=str(value.n_steps)),
+                "; pass its parameters (a dict) or a preset name instead.",
             )
         return value
     overrides = {} if n_steps is None else {"n_steps": n_steps}
@@ -90,21 +102,28 @@ def as_sampler(value: Any = None, n_steps: int | None = None) -> PathSampler:
             params = json.loads(value)
         except json.JSONDecodeError as exc:
             raise SamplerError(
-                f"sampler {value!r}: not valid JSON ({exc}); {accepted_forms()}."
+                _subject(value), f"not valid JSON ({exc}); ", _forms(), "."
             ) from exc
         if not isinstance(params, dict):
-            raise SamplerError(f"sampler {value!r}: not a JSON object; {accepted_forms()}.")
+            raise SamplerError(_subject(value), "not a JSON object; ", _forms(), ".")
         value = params
     if isinstance(value, str):
         if value not in PRESETS:
-            raise SamplerError(f"unknown preset {value!r}; {accepted_forms()}.")
+            raise SamplerError(f"unknown preset {value!r}; ", _forms(), ".")
         return PathSampler.preset(value, **overrides)
     if isinstance(value, dict):
         unknown = sorted(str(k) for k in value if k not in SAMPLER_PARAMETERS)
         if unknown:
             raise SamplerError(
-                f"sampler {value!r}: unknown parameter(s) {', '.join(unknown)}; "
-                f"{accepted_forms()}."
+                _subject(value),
+                f"unknown parameter(s) {', '.join(unknown)}; ",
+                _forms(),
+                ".",
             )
         return PathSampler.from_params({**value, **overrides})
-    raise SamplerError(f"sampler {value!r} is a {type(value).__name__}; {accepted_forms()}.")
+    raise SamplerError(
+        Fix("sampler", value, python=f"sampler {value!r}"),
+        f" is a {type(value).__name__}; ",
+        _forms(),
+        ".",
+    )

@@ -6,8 +6,6 @@ axes come from the spiral phyllotaxis pattern on the sphere; rotation amounts ar
 over the circle of angles. See ``docs/conventions.md`` for every choice made here. The named
 settings (`PRESETS`) are here beside `PathSampler.preset`; the coercion of user input into a
 sampler is `exactgrasp.paths.presets.as_sampler`.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry.se3`.
 """
 
 from __future__ import annotations
@@ -17,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import SamplerError
+from exactgrasp.errors import Fix, SamplerError
 from exactgrasp.geometry.se3 import exp_se3
 
 GOLDEN_ANGLE = 2.0 * np.pi * (1.0 - 2.0 / (1.0 + np.sqrt(5.0)))
@@ -116,7 +114,7 @@ def step_times(n_steps: int, rule: str = "paper") -> np.ndarray:
     numpy.ndarray, shape (n_steps,)
     """
     if n_steps < 1:
-        raise SamplerError(f"n_steps must be >= 1, got {n_steps}.")
+        raise SamplerError(Fix("n_steps"), f" must be >= 1, got {n_steps}.")
     k = np.arange(1, n_steps + 1, dtype=np.float64)
     if rule == "paper":
         return k / n_steps
@@ -200,7 +198,7 @@ class PathSampler:
             ("n_steps", n_steps),
         ):
             if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-                raise SamplerError(f"{name} must be a positive integer, got {value!r}.")
+                raise SamplerError(Fix(name), f" must be a positive integer, got {value!r}.")
         self.n_translations = int(n_translations)
         self.n_axes = int(n_axes)
         self.n_amounts = int(n_amounts)
@@ -230,7 +228,9 @@ class PathSampler:
             arr = np.asarray(steps, dtype=np.float64).ravel()
             if arr.size != self.n_steps or np.any(arr <= 0) or np.any(arr > 1):
                 raise SamplerError(
-                    f"steps must be {self.n_steps} times in (0, 1] (n_steps), got {arr}."
+                    f"steps must be {self.n_steps} times in (0, 1] (",
+                    Fix("n_steps"),
+                    f"), got {arr}.",
                 )
             self.step_rule = "explicit"
             self.times = arr

@@ -8,8 +8,6 @@ the paper's noise tests with both backends (``exactgrasp validate``,
 
 `run_validation` loads on first use: it pulls in the figures (matplotlib), which the
 ``exactgrasp`` command should not pay for when it only builds its parser (`report.args`).
-
-May import: `exactgrasp.errors` and the `exactgrasp.report` modules.
 """
 
 from __future__ import annotations

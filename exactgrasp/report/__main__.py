@@ -1,8 +1,6 @@
 """``python -m exactgrasp.report --data D --out O``: the validation report without the
 ``exactgrasp`` command (the options of ``exactgrasp validate``; works from a checkout root
 without installing, since ``-m`` puts the current folder on the path).
-
-May import: `exactgrasp.errors`, `exactgrasp.report.args`; never `exactgrasp.cli`.
 """
 
 from __future__ import annotations

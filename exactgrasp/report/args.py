@@ -3,9 +3,6 @@
 
 Light on purpose (the ``exactgrasp`` command imports it to build its parser): the report
 itself, and matplotlib with it, loads only when `run_from_args` runs a report.
-
-May import: `exactgrasp.datapath`, `exactgrasp.report.config`, `exactgrasp.report.data` (and
-`exactgrasp.report.run` inside `run_from_args`); never `exactgrasp.cli`.
 """
 
 from __future__ import annotations

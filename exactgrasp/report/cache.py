@@ -3,9 +3,6 @@
 The file name is a hash of everything that determines the values, so a re-run, or a run that
 was interrupted, picks up what is already there, and a changed setting never reads a stale
 file.
-
-May import: `exactgrasp.paths`, `exactgrasp.grasp`, `exactgrasp.backends`,
-`exactgrasp.descriptor`.
 """
 
 from __future__ import annotations

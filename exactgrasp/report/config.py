@@ -1,7 +1,4 @@
-"""How big a validation run is: every size in one place (paper, standard and quick).
-
-May import: `exactgrasp.paths`.
-"""
+"""How big a validation run is: every size in one place (paper, standard and quick)."""
 
 from __future__ import annotations
 

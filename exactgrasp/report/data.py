@@ -3,8 +3,6 @@
 Grasps come as `Case` records (a short name, the object, where it came from). Contact grasps
 on objects other than the cereal box are made from the raw human-study records with
 `exactgrasp.close_fingers`; a record it cannot repair is skipped and reported, never used.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry`, `exactgrasp.grasp`.
 """
 
 from __future__ import annotations

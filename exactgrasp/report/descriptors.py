@@ -1,7 +1,4 @@
-"""Descriptor level: do the two backends agree on which grasps look alike?
-
-May import: `exactgrasp.descriptor`.
-"""
+"""Descriptor level: do the two backends agree on which grasps look alike?"""
 
 from __future__ import annotations
 

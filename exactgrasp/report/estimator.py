@@ -1,8 +1,5 @@
 """How far the paper's voxel estimator is from the exact volume: pose by pose, along the paths,
 against resolution and surface weight, and what each costs.
-
-May import: `exactgrasp.paths`, `exactgrasp.compare` and the `exactgrasp.report`
-modules below it (cache, config, data).
 """
 
 from __future__ import annotations

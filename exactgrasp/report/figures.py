@@ -1,7 +1,6 @@
 """The report's PNG figures (matplotlib, Agg). Each function writes one file and returns it.
 
-May import: `exactgrasp.compare`, `exactgrasp.report.estimator` (matplotlib at the top:
-this is the one report module that loads it).
+matplotlib is imported at the top: this is the one report module that loads it.
 """
 
 from __future__ import annotations

@@ -1,7 +1,5 @@
 """Plain statements drawn from the report's numbers: what the estimator gets wrong, whether
 the paper's claims hold. Every sentence is computed, none is written by hand.
-
-May import: nothing from exactgrasp (it reads the report's numbers only).
 """
 
 from __future__ import annotations

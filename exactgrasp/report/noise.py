@@ -4,9 +4,6 @@ Object-pose noise: copies of six grasps on six objects, each with the object mov
 a little; the claim is that distances between copies of one grasp (within-object) are smaller
 than distances between copies of different grasps (between-object). Joint noise: the spray
 bottle grasp with every joint moved by 1..5 % of its range.
-
-May import: `exactgrasp.grasp`, `exactgrasp.descriptor` and the `exactgrasp.report` modules
-below it (cache, config, data).
 """
 
 from __future__ import annotations

@@ -1,8 +1,4 @@
-"""Run the whole validation: grasps, descriptors (cached), numbers, figures, report files.
-
-May import: `exactgrasp.version`, `exactgrasp.backends` and every other `exactgrasp.report`
-module except `args` and `__main__`.
-"""
+"""Run the whole validation: grasps, descriptors (cached), numbers, figures, report files."""
 
 from __future__ import annotations
 

@@ -1,7 +1,4 @@
-"""Writing the report: a JSON file of every summary number, a Markdown summary, an HTML page.
-
-May import: nothing from exactgrasp (it formats the report's numbers only).
-"""
+"""Writing the report: a JSON file of every summary number, a Markdown summary, an HTML page."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Looking at a grasp: an interactive HTML page (plotly) and a static PNG (matplotlib).
 
 `show` is the entry point (``eg.show``, ``exactgrasp show``); `build_scene` gives the geometry
-it draws. See ``docs/viewing.md``. May import: its own modules only.
+it draws. See ``docs/viewing.md``.
 """
 
 from exactgrasp.view.scene import Scene, build_scene

@@ -2,8 +2,6 @@
 
 The page needs no network when opened: plotly.js is written into it. Rotate with the left
 mouse button, pan with the right, zoom with the wheel; a click on a legend entry hides it.
-
-May import: `exactgrasp.errors`, `exactgrasp.view.scene`.
 """
 
 from __future__ import annotations

@@ -2,8 +2,6 @@
 
 For reports and documentation. matplotlib sorts whole meshes, not triangles across meshes,
 by depth, so overlaps can look slightly off; the HTML page is the faithful view.
-
-May import: `exactgrasp.errors`, `exactgrasp.view.scene`.
 """
 
 from __future__ import annotations

@@ -4,19 +4,18 @@ Everything is in the hand's canonical frame (see `exactgrasp.hands.frame`), wher
 paths live: one unit is half the palm-to-fingertip depth, the distance a translation path
 travels by ``t = 1``. The renderers (`exactgrasp.view.html`, `exactgrasp.view.png`) only draw
 what `build_scene` returns.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry`, `exactgrasp.paths`, `exactgrasp.grasp`.
 """
 
 from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import SamplerError
+from exactgrasp.errors import Fix, SamplerError
 from exactgrasp.geometry.se3 import exp_se3
 from exactgrasp.grasp.grasp import Grasp
 from exactgrasp.paths.presets import as_sampler
@@ -189,9 +188,17 @@ def resolve_sampler(
     """
     try:
         return as_sampler(sampler, n_steps=steps)
-    except (SamplerError, TypeError) as exc:
-        message = str(exc).replace("n_steps", steps_name)
-        raise SamplerError(message if message.startswith(name) else f"{name}: {message}") from exc
+    except TypeError as exc:
+        raise SamplerError(f"{name}: {exc}") from exc
+    except SamplerError as exc:
+        # A message about the sampler names it already; any other is about it.
+        prefix = () if exc.subject == "sampler" else (f"{name}: ",)
+        raise exc.respelled(partial(_steps_terms, steps_name), *prefix) from exc
+
+
+def _steps_terms(steps_name: str, fix: Fix) -> str:
+    """A sampler's fix, ``n_steps`` called ``steps_name``."""
+    return (fix.replace(parameter=steps_name) if fix.parameter == "n_steps" else fix).in_python()
 
 
 def choose_paths(sampler: PathSampler, n_paths: int, name: str = "n_paths") -> np.ndarray:

@@ -1,8 +1,4 @@
-"""`show`: write the picture of a grasp, an interactive HTML page and optionally a PNG.
-
-May import: `exactgrasp.grasp`, `exactgrasp.view.scene`, `exactgrasp.view.html`,
-`exactgrasp.view.png`.
-"""
+"""`show`: write the picture of a grasp, an interactive HTML page and optionally a PNG."""
 
 from __future__ import annotations
 

@@ -8,7 +8,7 @@ array-level core), `backend` (the `Backend`), `tables` (the kernel's named table
 """
 
 from exactgrasp.backends.exact.backend import ExactBackend
-from exactgrasp.backends.exact.intersector import ExactIntersector, repeated_poses
+from exactgrasp.backends.exact.intersector import ExactIntersector, Intersection, repeated_poses
 from exactgrasp.backends.exact.reference import FLOOR, RTOL, agrees, plain_error, plain_volumes
 
 __all__ = [
@@ -16,6 +16,7 @@ __all__ = [
     "RTOL",
     "ExactBackend",
     "ExactIntersector",
+    "Intersection",
     "agrees",
     "plain_error",
     "plain_volumes",

@@ -1,8 +1,5 @@
 """The "exact" backend: `ExactBackend`, the `Backend` wrapping `intersector.ExactIntersector`
 (the true volume of hand ∩ moved object, pose by pose; see ``docs/exact-backend.md``).
-
-Imports `backends.base`, `backends.defaults`, `cache`, `errors` and `intersector`, `options`,
-`reference` of this package.
 """
 
 from __future__ import annotations
@@ -18,7 +15,7 @@ from exactgrasp.backends.exact.intersector import ExactIntersector
 from exactgrasp.backends.exact.options import PARAMETERS, check_options
 from exactgrasp.backends.exact.reference import RTOL
 from exactgrasp.cache import LRUCache
-from exactgrasp.errors import require
+from exactgrasp.geometry.bvh import require_engine
 
 if TYPE_CHECKING:
     from exactgrasp.grasp import Grasp
@@ -37,10 +34,15 @@ class ExactBackend(Backend):
         batch worker, which sets the number (one per worker process: the batch already runs a
         worker per core; `exactgrasp.backends.base.thread_limit`). -1: every core, always.
         The volumes do not depend on it.
-    **tuning
-        Passed to `ExactIntersector` (``hand_cell``, ``object_cell``, ``capacity``).
+    hand_cell, object_cell : float, optional
+        Grid cell edges of the hand and of the object (canonical units); None (default):
+        1/`defaults.EXACT_CELLS_PER_EXTENT` of each mesh's largest extent.
+    capacity : int
+        Edge crossings recorded per pose before the pose falls back to a boolean (default
+        `defaults.EXACT_CAPACITY`).
 
-    Every option is checked against `PARAMETERS`.
+    Every option is checked against `PARAMETERS`, here, once; the intersectors built from
+    them take them as they are.
     """
 
     name = "exact"
@@ -53,16 +55,25 @@ class ExactBackend(Backend):
         self,
         broadphase: str | None = defaults.EXACT_BROADPHASE,
         n_jobs: int | None = defaults.EXACT_N_JOBS,
-        **tuning: Any,
+        hand_cell: float | None = None,
+        object_cell: float | None = None,
+        capacity: int = defaults.EXACT_CAPACITY,
     ):
-        tuning = check_options(broadphase, n_jobs, tuning, type(self).__name__)
-        if broadphase == "coal":
-            require("coal", "the exact backend's coal broad phase", "coal", "exact")
-        elif broadphase == "fcl":
-            require("fcl", "the exact backend's fcl broad phase", "python-fcl", "exact")
+        tuning = check_options(
+            broadphase,
+            n_jobs,
+            {"hand_cell": hand_cell, "object_cell": object_cell, "capacity": capacity},
+            type(self).__name__,
+        )
+        if broadphase is not None:
+            require_engine(broadphase, f"the exact backend's {broadphase} broad phase")
         self.broadphase = broadphase
         self.n_jobs = None if n_jobs is None else int(n_jobs)
-        self.tuning = dict(tuning)
+        # Provenance records the tuning that differs from the defaults (None cells are left
+        # out by `check_options`).
+        if tuning["capacity"] == defaults.EXACT_CAPACITY:
+            del tuning["capacity"]
+        self.tuning = tuning
         self._cache = LRUCache(self.cache_size)
 
     @property

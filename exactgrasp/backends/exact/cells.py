@@ -2,8 +2,7 @@
 triangle touches, how many surface cells a box of cells holds.
 
 The grids themselves (`tables.CellGrid`) are built by `grids.build_grid`; these kernels take
-their fields one by one, so that hot loops pass scalars and arrays, never the tuple. Imports
-numba and `predicates` only.
+their fields one by one, so that hot loops pass scalars and arrays, never the tuple.
 """
 
 from __future__ import annotations

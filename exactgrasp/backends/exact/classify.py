@@ -2,8 +2,7 @@
 mesh against the other, from the grids' cell statuses, the crossings' parities along edges and,
 for a shell with no classified vertex, one exact point test.
 
-See "Method", steps 1, 4 and 5, and "Culling rules" in ``docs/exact-backend.md``. Imports
-numba, `cells`, `predicates`, `tables`, `tolerances` and `geometry.predicates`.
+See "Method", steps 1, 4 and 5, and "Culling rules" in ``docs/exact-backend.md``.
 """
 
 from __future__ import annotations

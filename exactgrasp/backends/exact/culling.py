@@ -3,7 +3,6 @@ the kernel (every shell of both meshes outside the other, their surfaces apart).
 
 See "Culling rules" in ``docs/exact-backend.md``: culling never changes a bit of a result. The
 BVH queries are `geometry.bvh.MeshPair`'s, built only where `worth_building` says so.
-Imports numpy, scipy, `backends.defaults`, `classify`, `tables` and `geometry.winding`.
 """
 
 from __future__ import annotations

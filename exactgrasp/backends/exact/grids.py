@@ -1,8 +1,7 @@
 """Cell grids of the exact backend, built once per grasp: each mesh's `tables.CellGrid`, the
 hand's vertices numbered cell by cell, and the hand grid's per-cell search tables.
 
-See "Method, once per grasp" in ``docs/exact-backend.md``. Imports numpy, scipy, `cells`,
-`tables`, `tolerances` and `geometry.winding`.
+See "Method, once per grasp" in ``docs/exact-backend.md``.
 """
 
 from __future__ import annotations

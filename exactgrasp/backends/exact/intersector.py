@@ -13,9 +13,9 @@ The method (see ``docs/exact-backend.md``):
    any sign is uncertain is recomputed with a plain manifold3d boolean. Volumes therefore agree
    with the plain boolean to rounding (about 1e-14 relative, see `reference.agrees`).
 
-Its options follow the exact backend's rules (`options.check_options`). Imports numpy,
-`backends.base`, `backends.defaults`, `errors`, `geometry.bvh`, `geometry.manifold` and this
-package's modules below `backend`.
+Its options follow the exact backend's rules (`options.check_options`). Long because the
+intersector and its result (`Intersection`) document every table, counter and bound they hold
+next to the code that fills them.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -66,7 +67,7 @@ from exactgrasp.geometry.manifold import mesh_arrays, union_solids
 
 #: Largest grid a cell option may ask for (cells per grid): about 1.6 GB of tables.
 MAX_GRID_CELLS = 200_000_000
-#: What `ExactIntersector.pose_sources` says, indexed by the kernel's result code.
+#: What `Intersection.pose_sources` says, indexed by the kernel's result code.
 POSE_SOURCES = np.empty(4, dtype="<U7")
 POSE_SOURCES[[OK, CULLED, DEGENERATE, OVERFLOW]] = ("kernel", "culled", "boolean", "boolean")
 #: Pieces per thread the distinct poses of a call are dealt into (interleaved, taken by
@@ -107,6 +108,28 @@ def shifted(meshes: list[Mesh], origin: np.ndarray) -> list[Mesh]:
     return [(np.asarray(V, dtype=np.float64) - origin, F) for V, F in meshes]
 
 
+@dataclass(frozen=True)
+class Intersection:
+    """What `ExactIntersector.intersect` found for a stack of poses (see there).
+
+    Attributes
+    ----------
+    volumes : numpy.ndarray, shape poses.shape[:-2], float64
+        Intersection volumes (cubed canonical units).
+    volume_bounds : numpy.ndarray, same shape
+        ``|volume - true volume| <= bound``.
+    pose_sources : numpy.ndarray, same shape, str
+        ``"kernel"``, ``"culled"`` or ``"boolean"``.
+    stats : dict
+        Counters of the call (poses, repeats, culled, boolean, cells, pairs, threads, seconds).
+    """
+
+    volumes: np.ndarray
+    volume_bounds: np.ndarray
+    pose_sources: np.ndarray
+    stats: dict[str, Any]
+
+
 class ExactIntersector:
     """Exact volumes of a fixed hand ∩ a rigidly moved object.
 
@@ -132,8 +155,6 @@ class ExactIntersector:
     ----------
     hand_volume, object_volume : float
         Volumes of the union of the links and of the object bodies (cubed canonical units).
-    stats : dict
-        Counters of the last `volumes` call (see `volumes`).
     origin : numpy.ndarray, shape (3,)
         The local origin (centre of the hand's bounds) every table below is relative to.
     hand_solid, object_solid : manifold3d.Manifold
@@ -216,9 +237,6 @@ class ExactIntersector:
             "object_cell": self.object_grid.cell,
             "capacity": self.capacity,
         }
-        self.stats: dict[str, Any] = {}
-        self.pose_sources: np.ndarray = np.empty(0, dtype="<U7")
-        self.volume_bounds: np.ndarray = np.empty(0)
         self.areas = float(self.hand_solid.surface_area() + self.object_solid.surface_area())
 
     def broad_phase(self, poses: np.ndarray) -> np.ndarray | None:
@@ -297,7 +315,19 @@ class ExactIntersector:
     def volumes(
         self, poses: np.ndarray, progress: Callable[[int], Any] | None = None
     ) -> np.ndarray:
-        """Exact intersection volume for each pose.
+        """Exact intersection volume for each pose: `intersect`'s volumes alone.
+
+        Returns
+        -------
+        numpy.ndarray, shape poses.shape[:-2], float64
+            Volumes in cubed canonical units.
+        """
+        return self.intersect(poses, progress).volumes
+
+    def intersect(
+        self, poses: np.ndarray, progress: Callable[[int], Any] | None = None
+    ) -> Intersection:
+        """Exact intersection volume for each pose, with its bound, its source and counters.
 
         Parameters
         ----------
@@ -309,19 +339,19 @@ class ExactIntersector:
 
         Returns
         -------
-        numpy.ndarray, shape poses.shape[:-2], float64
-            Volumes in cubed canonical units. Afterwards `stats` holds ``poses``,
+        Intersection
+            ``volumes`` in cubed canonical units; ``stats`` holds ``poses``,
             ``poses_repeated`` (equal to an earlier pose to rounding, see `repeated_poses`:
             computed once), ``poses_culled`` (skipped by the broad phase), ``poses_boolean``
             (recomputed with a manifold3d boolean: uncertain sign or overflow), ``parts``
             (hand grid cells), ``threads`` (threads run),
             ``parts_culled`` / ``parts_inside`` / ``parts_clipped`` (summed over poses:
             cells away from the object's surface and outside / inside it, cells it crosses),
-            ``pairs_tested`` / ``pairs_crossing`` (face pairs) and ``seconds``; and
-            `pose_sources` (same shape as the result) says where each volume came from:
+            ``pairs_tested`` / ``pairs_crossing`` (face pairs) and ``seconds``;
+            ``pose_sources`` (same shape as the volumes) says where each volume came from:
             ``"kernel"``, ``"culled"`` (exactly 0, see ``docs/exact-backend.md``) or
             ``"boolean"`` (the manifold3d fallback: an exact coincidence the kernel's signs
-            cannot certify, or a full crossing buffer); `volume_bounds` (same shape) bounds
+            cannot certify, or a full crossing buffer); ``volume_bounds`` (same shape) bounds
             each volume's error: ``|volume - true volume| <= bound``, certified for the
             kernel's poses, 0 for culled ones, manifold3d's tolerance times both areas for
             the boolean's.
@@ -369,7 +399,7 @@ class ExactIntersector:
         pairs = stats[:, [STAT_PAIRS, STAT_CROSSING]].sum(0)
         out, bounds, codes, stats = out[back], bounds[back], codes[back], stats[back]
         tot = stats.sum(0)
-        self.stats = {
+        stats_out = {
             "poses": len(every),
             "poses_repeated": len(every) - n,
             "poses_culled": int((codes == CULLED).sum()),
@@ -383,6 +413,6 @@ class ExactIntersector:
             "pairs_crossing": int(pairs[1]),
             "seconds": time.perf_counter() - t0,
         }
-        self.pose_sources = POSE_SOURCES[codes].reshape(poses.shape[:-2])
-        self.volume_bounds = bounds.reshape(poses.shape[:-2])
-        return out.reshape(poses.shape[:-2])
+        shape = poses.shape[:-2]
+        sources = POSE_SOURCES[codes].reshape(shape)
+        return Intersection(out.reshape(shape), bounds.reshape(shape), sources, stats_out)

@@ -1,7 +1,5 @@
 """The exact backend's options and the rules they follow, shared by `backend.ExactBackend` and
 `intersector.ExactIntersector`.
-
-Imports `backends.defaults` and `backends.params` only.
 """
 
 from __future__ import annotations

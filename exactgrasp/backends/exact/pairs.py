@@ -2,8 +2,7 @@
 exact test (certified orientation signs) and the pieces the common-line test shares with it.
 
 See "Method" steps 2-3 and "Why it is exact" in ``docs/exact-backend.md``; `sums` holds the
-terms' formulas. Imports numba, `geometry.predicates`, `predicates`, `tables` and
-`tolerances`.
+terms' formulas.
 """
 
 from __future__ import annotations

@@ -4,8 +4,7 @@ Each pose runs the stages of "Method, per pose" in ``docs/exact-backend.md`` in 
 (`move_object`), near runs (`near_pass`), seeds (`seeds.object_edge_seeds`,
 `seeds.cotree_seeds`), pairs
 (`search.trace_pairs`), classify (`classify.classify_vertices`) and sum (`sums.volume_sum`).
-The tables are `tables`' named tuples. Imports numba, `classify`, `search`, `seeds`, `sums`,
-`tables` and `tolerances`.
+The tables are `tables`' named tuples.
 """
 
 from __future__ import annotations

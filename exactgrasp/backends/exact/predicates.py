@@ -1,8 +1,7 @@
 """Certified and filtered geometric tests of the exact kernel (numba): segment against
 triangle with certified orientation signs, triangle against box (separating axes).
 
-The orientation determinant and its error bound are `exactgrasp.geometry.predicates`'s. Imports
-numba, `geometry.predicates` and `tables` (the result codes) only.
+The orientation determinant and its error bound are `exactgrasp.geometry.predicates`'s.
 """
 
 from __future__ import annotations

@@ -1,8 +1,7 @@
 """Once-per-grasp tables of the exact backend: mesh topology, the hand's face, edge and part
 terms with their error bounds, and the object's pose-independent terms.
 
-See "Method, once per grasp" and "The volume's bound" in ``docs/exact-backend.md``. Imports
-numpy, `errors`, `grids`, `sums` (face terms), `tables` and `tolerances`.
+See "Method, once per grasp" and "The volume's bound" in ``docs/exact-backend.md``.
 """
 
 from __future__ import annotations
@@ -33,11 +32,12 @@ from exactgrasp.backends.exact.tolerances import (
     U_EXTENDED,
     U,
 )
-from exactgrasp.errors import MeshError
+from exactgrasp.errors import Fix, MeshError
 
 _REPAIR_HINT = (
-    "the exact backend needs closed, consistently oriented surfaces; load the mesh with "
-    "repair=True (or fix it in a mesh editor) and try again."
+    "the exact backend needs closed, consistently oriented surfaces; load the mesh with ",
+    Fix("repair", True),
+    " (or fix it in a mesh editor) and try again.",
 )
 
 
@@ -55,7 +55,7 @@ def prepare_mesh(V: np.ndarray, F: np.ndarray) -> MeshTables:
     uniq, inv, counts = np.unique(key, return_inverse=True, return_counts=True)
     forward = src < dst
     if np.any(counts != 2) or np.bincount(inv, weights=forward, minlength=len(uniq)).min() != 1:
-        raise MeshError(f"mesh is not a closed, oriented 2-manifold after merging; {_REPAIR_HINT}")
+        raise MeshError("mesh is not a closed, oriented 2-manifold after merging; ", *_REPAIR_HINT)
     ne = len(uniq)
     E = np.empty((ne, 2), np.int64)
     E[inv, 0] = lo

@@ -3,8 +3,7 @@
 `plain_volumes` is what the kernel is checked against (one ``Mesh64`` boolean of the whole hand
 and the whole object per pose); `agrees` is the rule "to `RTOL` relative, floored at `FLOOR`
 of the hand's volume" (see "Agreement" in ``docs/exact-backend.md``); `plain_error` is how far
-`plain_volumes` itself may be from the truth. Imports numpy, `backends.base`,
-`backends.exact.tolerances`, `errors` and `geometry.manifold`.
+`plain_volumes` itself may be from the truth.
 """
 
 from __future__ import annotations

@@ -1,8 +1,7 @@
 """Stage "pairs" of the exact kernel (numba): the crossing face pairs, traced along the curves
 where the surfaces cross from the seeds' candidates, and their segment terms.
 
-See "Method", steps 2 and 3, and "Why it is exact" in ``docs/exact-backend.md``. Imports
-numba, `pairs`, `predicates`, `tables` and `tolerances`.
+See "Method", steps 2 and 3, and "Why it is exact" in ``docs/exact-backend.md``.
 
 Long because `trace_pairs` is one kernel whose loops share some 40 locals: a call per pair
 would pass them (and update array reference counts) in the hottest loop.

@@ -11,8 +11,7 @@ and each co-tree edge near the object's surface against the object faces listed 
 object-grid cells it touches (`cotree_seeds`, in the object's frame). Both are filters whose
 tolerances exceed their rounding (and, in the object's frame, the pose's departure from a
 rotation): they may keep a pair that does not cross, which its evaluation rejects, and never
-drop one that does. See "Method", step 2, in ``docs/exact-backend.md``. Imports numba,
-`cells`, `tables` and `tolerances`.
+drop one that does. See "Method", step 2, in ``docs/exact-backend.md``.
 
 Long because each search is one kernel whose loops over edges, cells and listed faces share
 their locals: a call per cell would pass arrays and update their reference counts.

@@ -17,7 +17,7 @@ three kinds of purely local terms (``D_t = d_t n_t``):
 
 Only the signs of orientation determinants decide which terms appear (`predicates`, `search`,
 `classify`); this module adds the terms up. See "Method" and "The volume's bound" in
-``docs/exact-backend.md``. Imports numba, `tables` and `tolerances`.
+``docs/exact-backend.md``.
 """
 
 from __future__ import annotations

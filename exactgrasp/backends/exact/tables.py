@@ -5,7 +5,7 @@ take these as they are (``grid.cell_faces``, not ``grid[5]``). In hot loops a ke
 the fields it needs once, into locals: reading a field inside a loop over faces would update
 the arrays' reference counts there. Lengths are in the meshes' units, local coordinates (about
 the centre of the hand's bounds, see `intersector.ExactIntersector`). The tables are built by
-`prepare` and `grids`. Imports numpy and typing only.
+`prepare` and `grids`.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Every tolerance and error-bound coefficient of the exact backend, each with its reason.
 
 The derivations are in ``docs/exact-backend.md`` ("Why it is exact"); the kernels read these
-names as compile-time constants. Imports only numpy.
+names as compile-time constants.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ centres of its interior voxels, each standing for a cube of volume ``V_o``, and 
 surface, each standing for ``w_s``. For every pose the points inside the hand are counted
 (`kernel`), on every core (or as many threads as `backends.base.thread_limit` allows, one in
 a batch worker). Grids, points and the hand's volume are kept per process for every backend
-instance. Imports the backends' base, defaults and parameter checks, and its own room.
+instance.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from exactgrasp.backends import defaults
 from exactgrasp.backends.base import PROGRESS_PIECES, Backend, check_poses
 from exactgrasp.backends.params import Interval, Options, Param, validate_parameters
 from exactgrasp.backends.voxel.grids import GRID_RULES, HandOccupancy, hand_occupancy
-from exactgrasp.backends.voxel.kernel import estimate_volumes
+from exactgrasp.backends.voxel.kernel import volumes_of_checked
 from exactgrasp.backends.voxel.points import ObjectPoints, object_points
 from exactgrasp.cache import LRUCache
 from exactgrasp.errors import BackendError
@@ -34,11 +34,23 @@ SURFACE_SAMPLE_MODES = ("generate", "none")
 MAX_RESOLUTION = 1000
 
 # Grids, points and hand volumes shared by every VoxelBackend in the process, keyed by the
-# geometry's hash and the parameters they depend on: `compute_descriptor` builds a new backend
-# per call.
+# geometry's hash and the values of the parameters they depend on, named here: a backend is
+# often built per call (`compute_descriptor`), its geometry reused.
 _HAND_GRIDS = LRUCache(defaults.VOXEL_CACHE_SIZE)
 _OBJECT_POINTS = LRUCache(defaults.VOXEL_CACHE_SIZE)
 _HAND_VOLUMES = LRUCache(defaults.VOXEL_CACHE_SIZE)
+#: The parameters the hand's grid depends on (with ``grasp.hand_key``).
+GRID_PARAMETERS = ("hand_resolution", "grid")
+#: The parameters the object's points depend on (with ``grasp.object_key``): every one but
+#: the hand's resolution.
+POINT_PARAMETERS = (
+    "object_resolution",
+    "surface_spacing",
+    "surface_samples",
+    "surface_weight",
+    "seed",
+    "grid",
+)
 
 # Poses per piece at least when progress is reported: a piece takes a fraction of a second,
 # and each starts the kernel's threads anew.
@@ -156,7 +168,7 @@ class VoxelBackend(Backend):
         """
         hand_key = getattr(grasp, "hand_key", None)
         return _HAND_GRIDS.get(
-            None if hand_key is None else (hand_key, self.hand_resolution, self.grid),
+            None if hand_key is None else (hand_key, *self._values(GRID_PARAMETERS)),
             lambda: hand_occupancy(grasp.canonical_hand_links(), self.hand_resolution, self.grid),
         )
 
@@ -187,10 +199,12 @@ class VoxelBackend(Backend):
             )
 
         object_key = getattr(grasp, "object_key", None)
-        params = self.params
-        del params["hand_resolution"]
-        key = None if object_key is None else (object_key, *params.values())
+        key = None if object_key is None else (object_key, *self._values(POINT_PARAMETERS))
         return _OBJECT_POINTS.get(key, build)
+
+    def _values(self, names: tuple[str, ...]) -> tuple:
+        """The values of the parameters ``names``, for a cache key."""
+        return tuple(getattr(self, name) for name in names)
 
     def hand_volume(self, grasp: Grasp) -> float:
         """The hand's volume (union of its links), cubed canonical units.
@@ -217,8 +231,11 @@ class VoxelBackend(Backend):
         -------
         numpy.ndarray, shape poses.shape[:-2], float64
         """
-        poses = check_poses(poses)
-        return estimate_volumes(self.hand_grid(grasp), self.object_point_set(grasp), poses)
+        return self._volumes(grasp, check_poses(poses))
+
+    def _volumes(self, grasp: Grasp, poses: np.ndarray) -> np.ndarray:
+        """`volumes` of poses `check_poses` returned."""
+        return volumes_of_checked(self.hand_grid(grasp), self.object_point_set(grasp), poses)
 
     def volumes_with_progress(
         self, grasp: Grasp, poses: np.ndarray, advance: Callable[[int], Any] | None = None
@@ -244,7 +261,7 @@ class VoxelBackend(Backend):
         step = max(_PROGRESS_POSES, -(-len(flat) // PROGRESS_PIECES))
         out = np.empty(len(flat))
         for start in range(0, len(flat), step):
-            out[start : start + step] = self.volumes(grasp, flat[start : start + step])
+            out[start : start + step] = self._volumes(grasp, flat[start : start + step])
             if advance is not None:
                 advance(len(flat[start : start + step]))
         return out.reshape(poses.shape[:-2])

@@ -8,8 +8,7 @@ points apart: ``volume = interior_inside * V_o + surface_inside * w_s``.
 of boxes and skips, or counts whole, the boxes that the hand's summed tables decide);
 `estimate_counts_numpy` is the same estimator in plain vectorised numpy, every point of every
 pose tested. Both evaluate every point they test with the same floating-point operations in
-the same order, so their counts are identical. Imports `exactgrasp.backends.base` and the
-voxel room's grids and points only.
+the same order, so their counts are identical.
 """
 
 from __future__ import annotations
@@ -25,10 +24,12 @@ from exactgrasp.compiling import inner, kernel
 
 __all__ = [
     "count_inside",
+    "counts_of_checked",
     "estimate_counts",
     "estimate_counts_numpy",
     "estimate_volumes",
     "estimate_volumes_numpy",
+    "volumes_of_checked",
 ]
 
 
@@ -54,7 +55,7 @@ def _index_space(hand: HandOccupancy, poses: np.ndarray) -> tuple[np.ndarray, np
     Returns ``A = R / h`` (n, 3, 3) and ``b = (t - origin) / h`` (n, 3): a point ``x`` lands
     at grid coordinates ``A @ x + b`` (node ``(i, j, k)`` at integer coordinates).
     """
-    flat = check_poses(poses).reshape(-1, 4, 4)
+    flat = poses.reshape(-1, 4, 4)  # checked by the public entry points
     inv_h = 1.0 / hand.grid.spacing
     linear = np.ascontiguousarray(flat[:, :3, :3]) * inv_h
     offset = (np.ascontiguousarray(flat[:, :3, 3]) - hand.grid.origin) * inv_h
@@ -261,7 +262,14 @@ def estimate_counts(
     numpy.ndarray, shape poses.shape[:-2] + (2,), int64
         Interior points inside, surface points inside.
     """
-    poses = check_poses(poses)
+    return counts_of_checked(hand, obj, check_poses(poses), n_jobs)
+
+
+def counts_of_checked(
+    hand: HandOccupancy, obj: ObjectPoints, poses: np.ndarray, n_jobs: int | None = None
+) -> np.ndarray:
+    """`estimate_counts` of poses `exactgrasp.backends.base.check_poses` returned: the
+    backend checks them once, where they enter."""
     linear, offset = _index_space(hand, poses)
     n = len(linear)
     counts = np.zeros((n, 2), np.int64)
@@ -364,6 +372,13 @@ def estimate_volumes(
         ``interior_inside * V_o + surface_inside * w_s`` in the meshes' length units cubed.
     """
     return _volumes(obj, estimate_counts(hand, obj, poses, n_jobs))
+
+
+def volumes_of_checked(
+    hand: HandOccupancy, obj: ObjectPoints, poses: np.ndarray, n_jobs: int | None = None
+) -> np.ndarray:
+    """`estimate_volumes` of poses `exactgrasp.backends.base.check_poses` returned."""
+    return _volumes(obj, counts_of_checked(hand, obj, poses, n_jobs))
 
 
 def estimate_volumes_numpy(

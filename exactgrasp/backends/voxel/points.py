@@ -5,8 +5,7 @@ The estimator adds points on the object's surface so that thin parts, which may 
 interior voxel centre, still register (the paper used MeshLab's Poisson-disk resampling). Here
 candidates are drawn uniformly by area from a seeded generator and accepted greedily, in the
 order drawn, when no accepted point lies closer than the spacing: a dart-throwing Poisson-disk
-set that is deterministic for a fixed seed. Imports `exactgrasp.errors` and the voxel room's
-grids.
+set that is deterministic for a fixed seed.
 """
 
 from __future__ import annotations
