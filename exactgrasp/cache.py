@@ -1,7 +1,4 @@
-"""The keyed caches of exactgrasp: `LRUCache` in memory, `DiskCache` of arrays on disk.
-
-Imports nothing from exactgrasp.
-"""
+"""The keyed caches of exactgrasp: `LRUCache` in memory, `DiskCache` of arrays on disk."""
 
 from __future__ import annotations
 

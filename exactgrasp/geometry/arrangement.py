@@ -23,8 +23,6 @@ twice, a part turned inside out) are left for `exactgrasp.geometry.shells`, whic
 shells of a mesh together. A crossing too close to a corner or an edge of the other triangle
 to be cut with certainty is reported as `exactgrasp.errors.UncertainCrossingError`.
 
-Imports numpy, scipy, manifold3d, `exactgrasp.errors` and `exactgrasp.geometry` (`topology`,
-`winding`).
 """
 
 from __future__ import annotations

@@ -15,7 +15,6 @@ edges shared by four or more faces (two parts of a link touching along an edge),
   the same solid wedge, and a vertex whose faces then form several fans becomes one vertex
   per fan. The solid is unchanged; its surface may touch itself where it did before.
 
-Imports numpy and scipy only.
 """
 
 from __future__ import annotations

@@ -71,11 +71,9 @@ def check_self_contact(V, F, mine, t, u, contact, name, s, n_shells) -> None:
     )
 
 
-def untangle(V: np.ndarray, F: np.ndarray, name: str):
-    """Repeated faces dropped, non-manifold edges untangled, self-crossing shells cut; with
-    the shells and their crossings, what was done, and whether the result is final (every
-    shell was cut with the group it crosses: the mesh is the solid's boundary as it is)."""
-    actions: list[str] = []
+def _untangle_edges(V, F, name, actions):
+    """Repeated faces dropped and edges of more than two faces untangled (what was done is
+    appended to ``actions``); an open or misoriented surface refused."""
     G, repeated, cancelled = drop_repeated_faces(F)
     if repeated or cancelled:
         actions.append(
@@ -96,6 +94,15 @@ def untangle(V: np.ndarray, F: np.ndarray, name: str):
             f"{format_point(defects.nonmanifold_at)}) into pairs bounding one solid wedge each, "
             f"splitting {n_split} vertices"
         )
+    return W, G
+
+
+def untangle(V: np.ndarray, F: np.ndarray, name: str):
+    """Repeated faces dropped, non-manifold edges untangled, self-crossing shells cut; with
+    the shells and their crossings, what was done, and whether the result is final (every
+    shell was cut with the group it crosses: the mesh is the solid's boundary as it is)."""
+    actions: list[str] = []
+    W, G = _untangle_edges(V, F, name, actions)
     n_shells, label = split_shells(G, len(W))
     t, u, code, point = crossing_pairs(W, G, label)
     same = label[t] == label[u]
@@ -130,31 +137,9 @@ def untangle(V: np.ndarray, F: np.ndarray, name: str):
                 continue
             replaced[s] = True
             layered = True
-            mine = cross & (label[t] == s)
-            faces_s = np.flatnonzero(label == s)
-            local = np.full(len(G), -1)
-            local[faces_s] = np.arange(len(faces_s))
-            Vs, Fs = compact(W, G[faces_s])
-            where = f"shell {s} of {n_shells}" if n_shells > 1 else "the surface"
-            x = point[np.flatnonzero(mine)[0]]
-            try:
-                layers, n_cut = winding_layers(Vs, Fs, local[t[mine]], local[u[mine]])
-            except UncertainCrossingError as exc:
-                raise MeshError(
-                    f"{name}: {where} ({len(Vs)} vertices, {len(Fs)} triangles) crosses itself "
-                    f"in {int(mine.sum())} triangle pairs (e.g. near {format_point(x)}), and near "
-                    f"{format_point(exc.point)} {exc.why}, so the crossing cannot be cut with "
-                    f"certainty; {SELF_FIX}."
-                ) from exc
-            pieces += [(Vk, Fk) for _, Vk, Fk in layers]
-            kinds = ", ".join(
-                f"w >= {k}" if k > 0 else f"w <= {k} (reversed)" for k, _, _ in layers
-            )
-            actions.append(
-                f"cut {where} ({len(Vs)} vertices, {len(Fs)} triangles), which crosses itself "
-                f"in {int(mine.sum())} triangle pairs (e.g. near {format_point(x)}), along its "
-                f"crossings ({n_cut} triangles split) into the boundaries of {kinds}"
-            )
+            layers, action = _cut_alone(W, G, label, s, t, u, point, cross, name, n_shells)
+            pieces += layers
+            actions.append(action)
         # Cut groups are the solid's boundary already: with nothing else left, the shells need
         # relating no more.
         final = bool(replaced.all()) and not layered
@@ -179,6 +164,34 @@ def untangle(V: np.ndarray, F: np.ndarray, name: str):
     if not actions:
         return V, F, label, n_shells, t, u, code, actions, False
     return W, G, label, n_shells, t, u, code, actions, final
+
+
+def _cut_alone(W, G, label, s, t, u, point, cross, name, n_shells):
+    """Cut shell ``s`` along its own crossings into its winding-number layers (for the
+    shells around it to be related afterwards); returns the layers' meshes and the action."""
+    mine = cross & (label[t] == s)
+    faces_s = np.flatnonzero(label == s)
+    local = np.full(len(G), -1)
+    local[faces_s] = np.arange(len(faces_s))
+    Vs, Fs = compact(W, G[faces_s])
+    where = f"shell {s} of {n_shells}" if n_shells > 1 else "the surface"
+    x = point[np.flatnonzero(mine)[0]]
+    try:
+        layers, n_cut = winding_layers(Vs, Fs, local[t[mine]], local[u[mine]])
+    except UncertainCrossingError as exc:
+        raise MeshError(
+            f"{name}: {where} ({len(Vs)} vertices, {len(Fs)} triangles) crosses itself "
+            f"in {int(mine.sum())} triangle pairs (e.g. near {format_point(x)}), and near "
+            f"{format_point(exc.point)} {exc.why}, so the crossing cannot be cut with "
+            f"certainty; {SELF_FIX}."
+        ) from exc
+    kinds = ", ".join(f"w >= {k}" if k > 0 else f"w <= {k} (reversed)" for k, _, _ in layers)
+    action = (
+        f"cut {where} ({len(Vs)} vertices, {len(Fs)} triangles), which crosses itself "
+        f"in {int(mine.sum())} triangle pairs (e.g. near {format_point(x)}), along its "
+        f"crossings ({n_cut} triangles split) into the boundaries of {kinds}"
+    )
+    return [(Vk, Fk) for _, Vk, Fk in layers], action
 
 
 def _cut_group(W, G, label, members, name, n_shells):
