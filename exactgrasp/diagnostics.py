@@ -19,7 +19,6 @@ from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from exactgrasp.cache import LRUCache
 from exactgrasp.errors import warn_caller
@@ -112,9 +111,11 @@ def ignores_third_party_warnings(function: Callable) -> Callable:
 
 def _hull_vertices(points: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """(vertices (k, 3), facet equations (f, 4)) of the convex hull, None when degenerate."""
+    from scipy import spatial  # here, not above: the command line's --help imports this module
+
     try:
-        hull = ConvexHull(points)
-    except (QhullError, ValueError):
+        hull = spatial.ConvexHull(points)
+    except (spatial.QhullError, ValueError):
         return None
     return points[hull.vertices], hull.equations
 
@@ -180,10 +181,12 @@ def _gap(hull_a: tuple, hull_b: tuple) -> float:
         many, few = (va, vb) if len(va) >= len(vb) else (vb, va)
         step = -(-len(many) * len(few) // MINKOWSKI_POINTS)
         va, vb = (many[::step], few) if many is va else (few, many[::step])
+    from scipy import spatial
+
     difference = (va[:, None, :] - vb[None, :, :]).reshape(-1, 3)
     try:
-        hull = ConvexHull(difference)
-    except QhullError:
+        hull = spatial.ConvexHull(difference)
+    except spatial.QhullError:
         return 0.0
     if np.all(hull.equations[:, 3] <= 0.0):  # the origin is inside: the hulls meet
         return 0.0
@@ -239,9 +242,10 @@ def check_descriptor(
     """Check a grasp and its descriptor values; warn once per finding.
 
     Warns when the object is implausibly small or large beside the hand
-    (`SIZE_RATIO_RANGE`: usually a units mistake), when the object does not reach the convex hull of the hand (every value is then 0),
-    when every value is 0 for another reason, when the object overlaps the hand at the grasp
-    pose by more than `PENETRATION_LIMIT` of the smaller volume, and when a value exceeds
+    (`SIZE_RATIO_RANGE`: usually a units mistake), when the object does not reach the convex
+    hull of the hand (every value is then 0), when every value is 0 for another reason, when
+    the object overlaps the hand at the grasp pose by more than `PENETRATION_LIMIT` of the
+    smaller volume, and when a value exceeds
     `VALUE_LIMIT`.
 
     Parameters

@@ -27,6 +27,7 @@ LAYERS = {
     "progress": 0,
     "datapath": 0,
     "compiling": 0,
+    "lazy": 0,
     "geometry": 1,
     "hands": 2,
     "paths": 2,
@@ -55,9 +56,14 @@ def modules() -> dict[str, Path]:
 
 MODULES = modules()
 
-#: The lazy public names, the backend registry (entry points) and `require` of optional
-#: packages are the only places that import by name at run time.
-DYNAMIC_IMPORTERS = {"exactgrasp", "exactgrasp.backends.registry", "exactgrasp.errors"}
+#: The lazy public names (`exactgrasp.lazy`), the backend registry (entry points) and `require`
+#: of optional packages are the only places that import by name at run time.
+DYNAMIC_IMPORTERS = {
+    "exactgrasp",
+    "exactgrasp.backends.registry",
+    "exactgrasp.errors",
+    "exactgrasp.lazy",
+}
 
 
 def room(module: str) -> str:

@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 from typing import ClassVar
 
@@ -513,3 +515,45 @@ def test_docs_cover_every_command_and_flag():
         missing = [f for f in _flags(parser) if f"`{f}" not in sections[name]]
         assert not missing, f"docs/cli.md, exactgrasp {name}: flags not described {missing}"
         assert f"exactgrasp {name}" in sections[name], f"no example of exactgrasp {name}"
+
+
+# -- --help: fast, with an example --------------------------------------------------------------
+
+#: What ``--help`` must not load: the numerical and optional libraries behind the commands.
+HEAVY = ("numba", "trimesh", "scipy", "mujoco", "manifold3d", "matplotlib", "plotly", "dask",
+         "coal", "fcl", "pyarrow")  # fmt: skip
+COMMANDS = ("demo", "descriptor", "compare", "close", "inspect", "show", "overlap", "validate",
+            "batch")  # fmt: skip
+
+
+def test_help_loads_none_of_the_numerical_libraries():
+    """``exactgrasp --help`` and every command's ``--help``, each in a fresh interpreter: the
+    modules loaded are read from ``sys.modules`` (benchmarks/cli_help.py times them)."""
+    script = textwrap.dedent(
+        """
+        import contextlib, io, json, sys
+        from exactgrasp.cli import main
+        argv = sys.argv[1:]
+        with contextlib.redirect_stdout(io.StringIO()) as out:
+            try:
+                main([*argv, "--help"])
+            except SystemExit:
+                pass
+        loaded = sorted({m.split(".")[0] for m in sys.modules})
+        print(json.dumps({"loaded": loaded, "help": out.getvalue()}))
+        """
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    for argv in ([], *([c] for c in COMMANDS)):
+        done = subprocess.run(
+            [sys.executable, "-c", script, *argv], capture_output=True, text=True, env=env
+        )
+        assert done.returncode == 0, done.stderr[-2000:]
+        result = json.loads(done.stdout)
+        assert not set(HEAVY) & set(result["loaded"]), (argv, set(HEAVY) & set(result["loaded"]))
+        text = " ".join(result["help"].split())
+        assert "docs/cli.md" in text and "docs/tutorial.md" in text, argv
+        if argv:
+            assert f"Example: exactgrasp {argv[0]} " in text, argv
+        if argv and argv[0] in ("demo", "descriptor", "compare", "batch"):
+            assert "object_resolution" in text and "broadphase" in text, argv  # --param table

@@ -26,7 +26,7 @@ import numpy as np
 
 from exactgrasp.backends import Backend, get_backend
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
-from exactgrasp.batch.manifest import Manifest, ManifestRow, read_manifest
+from exactgrasp.batch.manifest import DEFAULT_PART_SIZE, Manifest, ManifestRow, read_manifest
 from exactgrasp.batch.store import (
     DESCRIPTORS_FILE,
     ERRORS_FILE,
@@ -50,8 +50,6 @@ from exactgrasp.progress import progress_bar
 from exactgrasp.version import __version__
 
 __all__ = ["DEFAULT_PART_SIZE", "BatchSummary", "run_batch"]
-
-DEFAULT_PART_SIZE = 32
 
 log = logging.getLogger(__name__)
 

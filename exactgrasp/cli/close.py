@@ -15,10 +15,15 @@ import inspect
 import warnings
 from typing import Any
 
-from exactgrasp.cli.common import add_grasp_options, flag_message, grasp_from_args, renamed
+from exactgrasp.cli.common import (
+    add_grasp_options,
+    described,
+    flag_message,
+    grasp_from_args,
+    renamed,
+)
 from exactgrasp.errors import ClosingError, JointError
 from exactgrasp.geometry.bvh import ENGINES
-from exactgrasp.grasp import Grasp
 from exactgrasp.grasp.closing import ClosingResult, close_fingers
 
 __all__ = ["add_parser", "cmd_close", "summary_lines"]
@@ -115,6 +120,8 @@ def cmd_close(args: argparse.Namespace) -> int:
     except (ClosingError, JointError) as exc:
         message = f"grasp {grasp.name!r}: {flag_message(str(exc), CLOSING_FLAGS)}"
         raise renamed(exc, message) from exc
+    from exactgrasp.grasp import Grasp
+
     closed = Grasp(result.hand, grasp.object, result.object_pose, name=grasp.name)
     out = closed.save(args.output)
     touching = sum(bool(f.contact_links) for f in result.fingers)
@@ -137,10 +144,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "close",
         help="close the fingers of a grasp onto its object; write the closed grasp file",
-        description="Open the closing joints of GRASP's hand, move the object out along the "
-        "palm normal if the open hand still penetrates it, then close each finger until it "
-        "touches the object (within --tolerance) or reaches its joint limits. Writes the "
-        "closed grasp to --output and prints each closing joint's value and contact.",
+        description=described(
+            "Open the closing joints of GRASP's hand, move the object out along the "
+            "palm normal if the open hand still penetrates it, then close each finger until it "
+            "touches the object (within --tolerance) or reaches its joint limits. Writes the "
+            "closed grasp to --output and prints each closing joint's value and contact.",
+            "exactgrasp close box.json -o box-closed.json",
+        ),
     )
     parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file (an articulated hand)")
     parser.add_argument("-o", "--output", required=True, help="closed grasp JSON file to write")

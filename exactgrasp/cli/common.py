@@ -17,13 +17,16 @@ import json
 import os
 import re
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.errors import ExactGraspError, SamplerError
 from exactgrasp.geometry.intake import UNITS
-from exactgrasp.grasp import Grasp
 from exactgrasp.paths.presets import DEFAULT_PRESET, SAMPLER_PARAMETERS, accepted_forms, as_sampler
 from exactgrasp.paths.sampler import PRESETS, PathSampler
+
+if TYPE_CHECKING:
+    from exactgrasp.grasp import Grasp
 
 __all__ = [
     "FILE_KEYS_TO_FLAGS",
@@ -35,6 +38,7 @@ __all__ = [
     "add_progress",
     "add_sampler",
     "add_steps",
+    "described",
     "flag_message",
     "grasp_from_args",
     "read_grasp",
@@ -90,6 +94,14 @@ def renamed(exc: ExactGraspError, message: str) -> ExactGraspError:
         return type(exc)(message)
     except TypeError:
         return ExactGraspError(message)
+
+
+def described(text: str, example: str) -> str:
+    """A command's ``--help`` description: ``text``, one example and where the rest is."""
+    return (
+        f"{text} Example: {example} . Every flag, with examples: docs/cli.md; from your own "
+        "hand and objects to a dataset's descriptors: docs/tutorial.md."
+    )
 
 
 # -- --backend -------------------------------------------------------------------------------
@@ -244,6 +256,8 @@ def read_grasp(
         As `Grasp.from_file`, with the fixes it names (grasp-file keys, Python arguments)
         spelled as the flags that make them.
     """
+    from exactgrasp.grasp import Grasp
+
     given = (("units", units), ("repair", repair), ("on_limit", on_limit))
     overrides = {key: value for key, value in given if value is not None}
     try:

@@ -19,18 +19,19 @@ from exactgrasp.cli.common import (
     add_grasp_options,
     add_progress,
     add_sampler,
+    described,
     grasp_from_args,
     sampler_from_args,
 )
 from exactgrasp.cli.params import add_param, build_backend, split_params
-from exactgrasp.compare import compare_backends, write_table
-from exactgrasp.descriptor import Descriptor, pairwise_distances
 from exactgrasp.errors import ExactGraspError
 
 __all__ = ["add_parser", "cmd_compare"]
 
 
 def _distances(inputs: list[Path]) -> int:
+    from exactgrasp.descriptor import Descriptor, pairwise_distances
+
     descriptors = [Descriptor.load(p) for p in inputs]
     if len(descriptors) < 2:
         raise ExactGraspError("compare needs at least two .npz descriptors.")
@@ -64,6 +65,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         params = split_params(args.param, names, flag="--backends")
         backends = [build_backend(name, params[name]) for name in names]
         grasp = grasp_from_args(args, inputs[0])
+        from exactgrasp.compare import compare_backends, write_table
+
         result = compare_backends(grasp, sampler, backends=backends, progress=args.progress)
         print(result.summary_text())
         if args.output:
@@ -80,9 +83,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "compare",
         help="distances between descriptor files, or backends pose by pose on a grasp file",
-        description="With two or more .npz descriptor files: their l2 and l2_diff distance "
-        "matrices. With one grasp JSON file: every backend of --backends on the same poses, "
-        "compared pose by pose with the last one (the reference).",
+        description=described(
+            "With two or more .npz descriptor files: their l2 and l2_diff distance "
+            "matrices. With one grasp JSON file: every backend of --backends on the same poses, "
+            "compared pose by pose with the last one (the reference).",
+            "exactgrasp compare box.json --backends voxel,exact -o poses.csv",
+        ),
     )
     parser.add_argument("inputs", nargs="+", metavar="INPUT", help="a.npz b.npz ... or GRASP.json")
     parser.add_argument(

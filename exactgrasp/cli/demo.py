@@ -10,21 +10,17 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from exactgrasp.backends import get_backend
-from exactgrasp.cli.common import add_progress, add_sampler, sampler_from_args
+from exactgrasp.cli.common import add_progress, add_sampler, described, sampler_from_args
 from exactgrasp.cli.params import add_param, backend_names, build_backend, split_params
-from exactgrasp.descriptor import Descriptor, compute_descriptor
-from exactgrasp.geometry import objects
-from exactgrasp.grasp import Grasp
-from exactgrasp.grasp.closing import close_grasp
-from exactgrasp.hands.barrett import barrett
-from exactgrasp.hands.gripper import parallel_gripper
 from exactgrasp.paths.presets import as_sampler
+
+if TYPE_CHECKING:
+    from exactgrasp.descriptor import Descriptor
+    from exactgrasp.grasp import Grasp
 
 __all__ = ["QUICK_SAMPLER", "add_parser", "cmd_demo", "demo_grasps", "run_demo"]
 
@@ -33,6 +29,8 @@ QUICK_SAMPLER = {"n_translations": 6, "n_axes": 2, "n_amounts": 2, "n_steps": 5}
 
 
 def _pose(rotation_deg: tuple[float, float, float], translation: tuple[float, float, float]):
+    from scipy.spatial.transform import Rotation
+
     pose = np.eye(4)
     pose[:3, :3] = Rotation.from_euler("xyz", rotation_deg, degrees=True).as_matrix()
     pose[:3, 3] = translation
@@ -51,6 +49,12 @@ def demo_grasps() -> list[Grasp]:
     -------
     list of Grasp
     """
+    from exactgrasp.geometry import objects
+    from exactgrasp.grasp import Grasp
+    from exactgrasp.grasp.closing import close_grasp
+    from exactgrasp.hands.barrett import barrett
+    from exactgrasp.hands.gripper import parallel_gripper
+
     knuckle_top = 0.0914
     specs = [
         # a can lying across the palm, its axis along x (across the fingers)
@@ -140,6 +144,9 @@ def run_demo(
     int
         Exit status (0).
     """
+    from exactgrasp.backends import get_backend
+    from exactgrasp.descriptor import compute_descriptor
+
     out.mkdir(parents=True, exist_ok=True)
     sampler = as_sampler(QUICK_SAMPLER if quick else sampler, n_steps=n_steps)
     backends = backend_names()
@@ -191,10 +198,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "demo",
         help="built-in grasps on every available backend",
-        description="Close the built-in Barrett hand onto three built-in objects and the "
-        "built-in parallel gripper onto a box, compute each "
-        "grasp's descriptor with every available backend, print a table of times and values "
-        "and write a plot, a summary and the descriptors into --out.",
+        description=described(
+            "Close the built-in Barrett hand onto three built-in objects and the "
+            "built-in parallel gripper onto a box, compute each "
+            "grasp's descriptor with every available backend, print a table of times and values "
+            "and write a plot, a summary and the descriptors into --out.",
+            "exactgrasp demo --quick --out demo-output",
+        ),
     )
     parser.add_argument("--out", default="demo-output", help="folder for the plot and table")
     parser.add_argument(

@@ -19,13 +19,9 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-from exactgrasp.cli.common import renamed
+from exactgrasp.cli.common import described, renamed
 from exactgrasp.errors import ExactGraspError, ModelError
-from exactgrasp.grasp.closing import closing_directions
-from exactgrasp.hands.builtins import BUILTIN_MJCF, get_builtin
-from exactgrasp.hands.hand import Hand
-from exactgrasp.hands.loading import compile_source, load_model
-from exactgrasp.hands.scene import body_tree
+from exactgrasp.hands.builtins import BUILTIN_MJCF
 
 __all__ = ["add_parser", "cmd_inspect", "inspect_lines", "package_dirs_from_args"]
 
@@ -78,6 +74,12 @@ def inspect_lines(
     -------
     list of str
     """
+    from exactgrasp.grasp.closing import closing_directions
+    from exactgrasp.hands.builtins import get_builtin
+    from exactgrasp.hands.hand import Hand
+    from exactgrasp.hands.loading import compile_source, load_model
+    from exactgrasp.hands.scene import body_tree
+
     xml = BUILTIN_MJCF.get(model) if not Path(model).exists() else None
     path = f"{model}.xml" if xml is not None else model
     mj_model = compile_source(path, geometry=geometry, package_dirs=package_dirs, xml=xml)
@@ -148,12 +150,15 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "inspect",
         help="the body tree of a URDF/MJCF hand model: joints, limits, geoms, sites",
-        description=(
-            "Print the bodies of a URDF or MJCF model (or of a built-in hand: "
-            f"{', '.join(sorted(BUILTIN_MJCF))}) with their joints (type, axis, limits), geoms "
-            "(count, kinds, size) and sites, the top-level bodies that could be the hand, and "
-            "the hand load_model makes of it: to choose root_body, the palm frame and the "
-            "closing joints."
+        description=described(
+            (
+                "Print the bodies of a URDF or MJCF model (or of a built-in hand: "
+                f"{', '.join(sorted(BUILTIN_MJCF))}) with their joints (type, axis, limits), "
+                "geoms (count, kinds, size) and sites, the top-level bodies that could be the "
+                "hand, and the hand load_model makes of it: to choose root_body, the palm frame "
+                "and the closing joints."
+            ),
+            "exactgrasp inspect my_hand.urdf --package-dir my_hand_description=./meshes",
         ),
     )
     parser.add_argument("model", metavar="MODEL", help="URDF/MJCF file or built-in hand name")

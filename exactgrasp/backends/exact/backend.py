@@ -1,8 +1,8 @@
 """The "exact" backend: `ExactBackend`, the `Backend` wrapping `intersector.ExactIntersector`
 (the true volume of hand ∩ moved object, pose by pose; see ``docs/exact-backend.md``).
 
-Imports `backends.base`, `backends.defaults`, `cache`, `errors` and `intersector`, `options`,
-`reference` of this package.
+Imports `backends.base`, `backends.defaults`, `cache`, `errors` and `intersector` (on first use:
+the class and its parameters load without numba, for ``--help``), `options`, `tolerances`.
 """
 
 from __future__ import annotations
@@ -14,13 +14,13 @@ import numpy as np
 
 from exactgrasp.backends import defaults
 from exactgrasp.backends.base import Backend, check_poses
-from exactgrasp.backends.exact.intersector import ExactIntersector
 from exactgrasp.backends.exact.options import PARAMETERS, check_options
-from exactgrasp.backends.exact.reference import RTOL
+from exactgrasp.backends.exact.tolerances import RTOL
 from exactgrasp.cache import LRUCache
 from exactgrasp.errors import require
 
 if TYPE_CHECKING:
+    from exactgrasp.backends.exact.intersector import ExactIntersector
     from exactgrasp.grasp import Grasp
 
 
@@ -72,6 +72,9 @@ class ExactBackend(Backend):
 
     def intersector(self, grasp: Grasp) -> ExactIntersector:
         """The `ExactIntersector` of a grasp, built once per `grasp.geometry_key`."""
+        # Here, not above: the class and its parameters load without numba, for ``--help``.
+        from exactgrasp.backends.exact.intersector import ExactIntersector
+
         return self._cache.get(
             grasp.geometry_key,
             lambda: ExactIntersector(
