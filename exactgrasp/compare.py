@@ -25,6 +25,18 @@ from exactgrasp.paths.sampler import PathSampler
 RELATIVE_FLOOR = 1e-4
 
 
+#: The legend `Comparison.summary_text` prints under its table.
+COLUMNS_TEXT = f"""\
+columns, each backend against {{reference}} over the same poses:
+  |rel|        |value - reference| / reference, over the poses whose reference value
+               exceeds {RELATIVE_FLOOR:g} (descriptor units): median, 95th percentile, max
+  mean signed  mean of value - reference over every pose, in descriptor units (volume /
+               hand volume); below 0: this backend reads less than {{reference}} on average
+  corr         Pearson correlation of the values with {{reference}}'s, every pose
+  FP           poses where {{reference}} reads 0 and this backend more (an overlap not there)
+  FN           poses where {{reference}} reads more than 0 and this backend 0 (one missed)"""
+
+
 @dataclass
 class Comparison:
     """Result of `compare_backends`.
@@ -70,6 +82,7 @@ class Comparison:
                 f"{s['mean_signed_error']:12.4g} {s['correlation']:8.4f} "
                 f"{s['false_positive_poses']:5d} {s['false_negative_poses']:5d}"
             )
+        lines.extend(COLUMNS_TEXT.format(reference=self.reference).splitlines())
         return "\n".join(lines)
 
     def to_pandas(self):

@@ -557,3 +557,28 @@ def test_help_loads_none_of_the_numerical_libraries():
             assert f"Example: exactgrasp {argv[0]} " in text, argv
         if argv and argv[0] in ("demo", "descriptor", "compare", "batch"):
             assert "object_resolution" in text and "broadphase" in text, argv  # --param table
+
+
+def test_a_missing_palm_frame_has_one_fix_in_the_error_and_in_inspect(tmp_path, capsys):
+    """The tutorial's hand without its palm_frame.json: `Hand.from_urdf` and `inspect` give
+    the same fix, naming the file to write beside the model."""
+    from exactgrasp.datapath import examples_dir
+
+    urdf = tmp_path / "two_finger.urdf"
+    urdf.write_text((examples_dir() / "hand" / "two_finger.urdf").read_text())
+    with pytest.raises(eg.FrameError) as caught:
+        eg.Hand.from_urdf(urdf)
+    error = str(caught.value)
+    prefix = "two_finger has no palm frame; "
+    assert error.startswith(prefix + f"write the palm frame into {tmp_path / 'palm_frame.json'}: ")
+    fix = error.removeprefix(prefix).removesuffix(".")
+    assert main(["inspect", str(urdf)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert f"  palm frame: none; {fix}" in lines
+    assert '{"origin": [x, y, z], "normal": [x, y, z], "up": [x, y, z], "depth": d}' in fix
+    assert "docs/tutorial.md" in fix
+    # Written as it says, the model loads, with that frame.
+    (tmp_path / "palm_frame.json").write_text(
+        json.dumps({"origin": [0, 0, 0.03], "normal": [0, 0, 1], "up": [0, 1, 0], "depth": 0.08})
+    )
+    assert eg.Hand.from_urdf(urdf).frame.scale == pytest.approx(2 / 0.08)

@@ -31,11 +31,11 @@ def first_python_block() -> str:
 def cli_lines() -> list[list[str]]:
     """The ``exactgrasp`` lines of the README's command-line block, comments dropped."""
     section = README.split("## Command line", 1)[1]
-    block = re.search(r"^```\n(.*?)^```", section, re.S | re.M).group(1)
+    block = re.search(r"^```bash\n(.*?)^```", section, re.S | re.M).group(1)
     lines = []
     for line in block.splitlines():
         words = shlex.split(line, comments=True)
-        if words and words[0] == ".venv/bin/exactgrasp":
+        if words and words[0] == "exactgrasp":
             lines.append(words[1:])
     return lines
 
@@ -55,6 +55,8 @@ def test_readme_install_line_works_from_a_checkout():
     extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     assert "all" in extras["optional-dependencies"]
     assert ".venv/bin/exactgrasp" in README and "source .venv/bin/activate" in README
+    # "in any folder" and the command that runs it agree: python of the activated environment.
+    assert "in any folder you like" in README and "run `python first.py` in that folder" in README
 
 
 def test_readme_first_example_needs_nothing_but_the_package():

@@ -78,6 +78,7 @@ def inspect_lines(
     from exactgrasp.hands.builtins import get_builtin
     from exactgrasp.hands.hand import Hand
     from exactgrasp.hands.loading import compile_source, load_model
+    from exactgrasp.hands.palm import missing_palm_fix
     from exactgrasp.hands.scene import body_tree
 
     xml = BUILTIN_MJCF.get(model) if not Path(model).exists() else None
@@ -111,8 +112,10 @@ def inspect_lines(
     for dep, (driver, ratio, offset) in hand.couplings.items():
         lines.append(f"  {dep} = {offset:g} + {ratio:g} * {driver}")
     if hand.palm is None:
-        lines.append("  palm frame: none (pass palm= or write palm_frame.json beside the model)")
-        return [*lines, "  closing joints: name them (joints=[...]) or give a palm frame"]
+        lines.append(
+            f"  palm frame: none; {missing_palm_fix(hand.source if xml is None else None)}"
+        )
+        return [*lines, "  closing joints: found from the palm frame, once it is written"]
     p = hand.palm
     lines.append(
         f"  palm frame: origin {_xyz(p.origin)}, normal {_xyz(p.normal)}, up {_xyz(p.up)}, "
