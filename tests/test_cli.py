@@ -582,3 +582,34 @@ def test_a_missing_palm_frame_has_one_fix_in_the_error_and_in_inspect(tmp_path, 
         json.dumps({"origin": [0, 0, 0.03], "normal": [0, 0, 1], "up": [0, 1, 0], "depth": 0.08})
     )
     assert eg.Hand.from_urdf(urdf).frame.scale == pytest.approx(2 / 0.08)
+
+
+def test_quick_is_documented_with_the_paths_it_runs():
+    from exactgrasp.cli.demo import QUICK_SAMPLER
+    from exactgrasp.paths.presets import as_sampler
+
+    quick = as_sampler(QUICK_SAMPLER)
+    kinds = dict(zip(*np.unique(quick.paths.kind, return_counts=True), strict=True))
+    assert (quick.n_paths, quick.n_steps) == (34, 5)
+    assert kinds == {"translation": 6, "rotation": 4, "both": 24}
+    assert "a small sampler (34 paths x 5 steps)" in " ".join(_help("demo").split())
+    cli_page = " ".join((ROOT / "docs" / "cli.md").read_text().split())
+    assert "a small sampler (34 paths x 5 steps: 6 translations, 4 rotations and 24" in cli_page
+
+
+def test_compare_of_different_samplers_names_each_file(grasp_file, tmp_path, capsys):
+    small = '{"n_translations": 3, "n_axes": 2, "n_amounts": 2, "n_steps": 3}'
+    a, b = tmp_path / "a.npz", tmp_path / "b.npz"
+    assert main(["descriptor", str(grasp_file), "-o", str(a), "--sampler", small, *COARSE]) == 0
+    argv = ["descriptor", str(grasp_file), "-o", str(b), "--sampler", small, "--steps", "4"]
+    assert main([*argv, *COARSE]) == 0
+    capsys.readouterr()
+    err = " ".join(_error(capsys, ["compare", str(a), str(b)]).split())
+    assert f"{a} and {b} come from different samplers" in err
+    assert f"{a}: 19 paths x 3 steps, sampler " in err and f"{b}: 19 paths x 4 steps" in err
+    # The command it suggests gives a descriptor the first one compares with.
+    suggested = re.search(r"--sampler '(\{.*?\})'", err).group(1)
+    c = tmp_path / "c.npz"
+    argv = ["descriptor", str(grasp_file), "-o", str(c), "--sampler", suggested, *COARSE]
+    assert main(argv) == 0
+    assert main(["compare", str(a), str(c)]) == 0

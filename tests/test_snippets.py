@@ -18,6 +18,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import exactgrasp as eg
@@ -137,3 +138,29 @@ def test_the_readme_runs_as_written(tmp_path):
         assert (tmp_path / name).is_file(), name
     assert (tmp_path / "demo-output" / "descriptors.png").is_file()
     assert "UserWarning" not in done.stderr, done.stderr[-3000:]
+
+
+@pytest.mark.slow
+def test_the_batch_pages_python_block_runs_as_written(tmp_path):
+    """docs/batch.md's block, saved as a script beside a two-grasp grasps.jsonl and run: the
+    workers are processes, which its __main__ guard lets start."""
+    pytest.importorskip("distributed", reason="the batch needs the 'batch' extra")
+    (code,) = [code for lang, code in blocks(ROOT / "docs" / "batch.md") if lang == "python"]
+    hand = eg.Hand.from_urdf(examples_dir() / "hand" / "two_finger.urdf")
+    can = eg.Solid.from_file(examples_dir() / "objects" / "can.stl", units="mm")
+    rows = []
+    for i, z in enumerate((0.068, 0.08)):
+        pose = np.eye(4)
+        pose[2, 3] = z
+        eg.Grasp(hand, can, pose, name=f"g{i}").save(tmp_path / f"g{i}.json")
+        rows.append(json.dumps({"id": f"g{i}", "grasp": f"g{i}.json"}) + "\n")
+    (tmp_path / "grasps.jsonl").write_text("".join(rows))
+    (tmp_path / "script.py").write_text(code + "    print(distances.shape, values.shape)\n")
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "EXACTGRASP_NO_PROGRESS": "1"}
+    done = subprocess.run(
+        [sys.executable, "script.py"], cwd=tmp_path, env=env, capture_output=True, text=True,
+        timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "2 grasps: 2 done, 0 failed" in done.stdout
+    assert "(2, 2) (2, 474, 9)" in done.stdout

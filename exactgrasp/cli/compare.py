@@ -11,6 +11,7 @@ May import: `exactgrasp.errors`, `exactgrasp.backends.defaults`, `exactgrasp.cli
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +36,16 @@ def _distances(inputs: list[Path]) -> int:
     descriptors = [Descriptor.load(p) for p in inputs]
     if len(descriptors) < 2:
         raise ExactGraspError("compare needs at least two .npz descriptors.")
+    first = descriptors[0]
+    for path, other in zip(inputs[1:], descriptors[1:], strict=True):
+        if other.shape != first.shape or other.sampler.params != first.sampler.params:
+            raise ExactGraspError(
+                f"{inputs[0]} and {path} come from different samplers, so their paths do not "
+                f"correspond: {inputs[0]}: {_sampler_text(first)}; {path}: "
+                f"{_sampler_text(other)}. Compute both with the same --sampler and --steps "
+                f"(exactgrasp descriptor GRASP --sampler '{_sampler_json(first)}' -o OUT.npz "
+                f"gives {inputs[0].name}'s)."
+            )
     for kind in ("l2", "l2_diff"):
         matrix = pairwise_distances(descriptors, kind=kind)
         print(f"{kind} distances:")
@@ -42,6 +53,14 @@ def _distances(inputs: list[Path]) -> int:
             row = "  ".join(f"{matrix[i, j]:10.6f}" for j in range(len(inputs)))
             print(f"  {path.name:30s} {row}")
     return 0
+
+
+def _sampler_json(d) -> str:
+    return json.dumps(d.sampler.params, separators=(", ", ": "))
+
+
+def _sampler_text(d) -> str:
+    return f"{d.shape[0]} paths x {d.shape[1]} steps, sampler {_sampler_json(d)}"
 
 
 def cmd_compare(args: argparse.Namespace) -> int:

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 
 __all__ = ["QUICK_SAMPLER", "add_parser", "cmd_demo", "demo_grasps", "run_demo"]
 
-#: The sampler of ``--quick``: 24 paths x 5 steps.
+#: The sampler of ``--quick``: 34 paths (6 translations, 4 rotations, 24 both) x 5 steps.
 QUICK_SAMPLER = {"n_translations": 6, "n_axes": 2, "n_amounts": 2, "n_steps": 5}
 
 
@@ -131,7 +131,7 @@ def run_demo(
     sampler : PathSampler or str or dict, optional
         Anything `exactgrasp.paths.as_sampler` takes (default: the ``"balanced"`` preset).
     quick : bool
-        The small `QUICK_SAMPLER` (24 paths x 5 steps) instead of ``sampler``.
+        The small `QUICK_SAMPLER` (34 paths x 5 steps) instead of ``sampler``.
     progress : bool, optional
         Progress bars; default only on a terminal.
     n_steps : int, optional
@@ -206,11 +206,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "exactgrasp demo --quick --out demo-output",
         ),
     )
+    quick = as_sampler(QUICK_SAMPLER)
     parser.add_argument("--out", default="demo-output", help="folder for the plot and table")
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="a small sampler (24 paths x 5 steps) instead of --sampler, for a fast look",
+        help=f"a small sampler ({quick.n_paths} paths x {quick.n_steps} steps) instead of "
+        "--sampler, for a fast look",
     )
     add_param(parser)
     add_sampler(parser)
