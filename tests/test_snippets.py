@@ -1,8 +1,8 @@
 """Every code block of the README and of the tutorial runs as written, in order.
 
-A page's blocks run in one bash session in an empty folder: ``bash`` blocks as they are,
+A page's blocks run in one bash shell in an empty folder: ``bash`` blocks as they are,
 ``python`` blocks as scripts (each saved to a file of its own and run with ``python``), as a
-reader runs them. The session has the checkout's environment as a reader has it after
+reader runs them. The shell has the checkout's environment as a reader has it after
 ``source .venv/bin/activate``: ``python`` is this interpreter and ``exactgrasp`` the command,
 both importing this checkout. Blocks marked ``text`` (output shown) and ``json`` (file
 contents shown) are not run; the json blocks are checked against the files they show.
@@ -35,7 +35,7 @@ def blocks(page: Path) -> list[tuple[str, str]]:
     return [(m.group(1), m.group(2)) for m in BLOCK.finditer(page.read_text())]
 
 
-def session(page: Path, folder: Path, skip: tuple[str, ...] = ()) -> subprocess.CompletedProcess:
+def shell(page: Path, folder: Path, skip: tuple[str, ...] = ()) -> subprocess.CompletedProcess:
     """Run the page's bash and python blocks in order in ``folder``; blocks starting with one
     of ``skip`` are left out."""
     bin_dir = folder / ".bin"
@@ -86,7 +86,7 @@ def test_every_block_is_run_or_shown(page):
 def test_the_tutorial_runs_as_written(tmp_path):
     pytest.importorskip("pyarrow", reason="the batch needs the 'batch' extra")
     pytest.importorskip("plotly", reason="exactgrasp show needs the 'view' extra")
-    done = session(ROOT / "docs" / "tutorial.md", tmp_path)
+    done = shell(ROOT / "docs" / "tutorial.md", tmp_path)
     assert done.returncode == 0, (done.stdout[-3000:], done.stderr[-5000:])
     work = tmp_path / "grasp-tutorial"
     out = done.stdout
@@ -131,7 +131,7 @@ def test_the_tutorials_palm_frame_is_the_file_it_shows():
 @pytest.mark.slow
 def test_the_readme_runs_as_written(tmp_path):
     pytest.importorskip("plotly", reason="exactgrasp show needs the 'view' extra")
-    done = session(ROOT / "README.md", tmp_path)
+    done = shell(ROOT / "README.md", tmp_path)
     assert done.returncode == 0, (done.stdout[-3000:], done.stderr[-5000:])
     assert "(474, 9)" in done.stdout
     for name in ("box.json", "box.npz", "box-cli.npz", "poses.csv", "box.html"):
