@@ -49,6 +49,17 @@ def test_readme_starts_with_make_demo_and_make_test():
     assert re.search(r"^demo:", makefile, re.M) and re.search(r"^test:", makefile, re.M)
 
 
+def test_make_demo_compiles_the_kernels_while_setting_up():
+    """The set-up step (the stamp) runs the quick demo, whose first use compiles both
+    backends' kernels (with their notice), before `make demo` times anything."""
+    makefile = (ROOT / "Makefile").read_text()
+    setup = makefile.split("$(STAMP): pyproject.toml\n", 1)[1].split("\n\n", 1)[0]
+    lines = [line.strip() for line in setup.splitlines() if not line.strip().startswith("@#")]
+    assert lines[-2].startswith("$(BIN)/exactgrasp demo --quick"), lines
+    assert lines[-1] == "touch $(STAMP)"
+    assert re.search(r"^demo: \$\(STAMP\)\n\t\$\(BIN\)/exactgrasp demo", makefile, re.M)
+
+
 def test_readme_install_line_works_from_a_checkout():
     assert 'pip install ".[all]"' in README
     assert 'pip install "exactgrasp[all]"' not in README  # not on an index

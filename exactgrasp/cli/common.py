@@ -44,6 +44,7 @@ __all__ = [
     "read_grasp",
     "renamed",
     "sampler_from_args",
+    "timing",
 ]
 
 ON_LIMIT = ("error", "clip")
@@ -102,6 +103,16 @@ def described(text: str, example: str) -> str:
         f"{text} Example: {example} . Every flag, with examples: docs/cli.md; from your own "
         "hand and objects to a dataset's descriptors: docs/tutorial.md."
     )
+
+
+def timing(metadata: dict) -> str:
+    """``in 2.31 s``, with the seconds spent compiling the kernels said apart (a descriptor's
+    ``seconds`` include them; they are spent once, on first use)."""
+    compiled = float(metadata.get("compile_seconds", 0.0))
+    text = f"in {metadata['seconds'] - compiled:.2f} s"
+    if compiled >= 0.05:
+        text += f" (and {compiled:.1f} s compiling the kernels, first use only)"
+    return text
 
 
 # -- --backend -------------------------------------------------------------------------------

@@ -18,6 +18,7 @@ from exactgrasp.cli.common import (
     described,
     grasp_from_args,
     sampler_from_args,
+    timing,
 )
 from exactgrasp.cli.params import add_param, build_backend, split_params
 
@@ -36,7 +37,7 @@ def cmd_descriptor(args: argparse.Namespace) -> int:
     values = descriptor.values
     print(
         f"{grasp.name}: {values.shape[0]} paths x {values.shape[1]} steps with "
-        f"{args.backend!r} in {descriptor.metadata['seconds']:.2f} s; "
+        f"{args.backend!r} {timing(descriptor.metadata)}; "
         f"mean {values.mean():.5f}, max {values.max():.5f} -> {out}"
     )
     return 0
