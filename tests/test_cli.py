@@ -131,6 +131,11 @@ def test_demo_quick(tmp_path, capsys):
     assert {"can", "box", "jug handle"} <= {row["grasp"] for row in summary}
     png = (tmp_path / "demo" / "descriptors.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
+    import matplotlib.image
+
+    # paths x steps images of four grasps (rows) by two backends: a tall figure, not a strip
+    image = matplotlib.image.imread(tmp_path / "demo" / "descriptors.png")
+    assert image.shape[0] > image.shape[1] > 600
     assert "seconds" in out
 
 

@@ -231,3 +231,49 @@ def test_the_blank_check_fails_on_a_page_without_webgl(tmp_path):
     subprocess.run(command, capture_output=True, timeout=90)
     orange, grey_blue = drawn(colours(png)[2])
     assert orange < 0.005 and grey_blue < 0.01
+
+
+# -- descriptors as pictures ---------------------------------------------------------------------
+
+
+def test_paths_are_ordered_by_kind_then_direction():
+    from exactgrasp.view.descriptors import KIND_ORDER, path_order
+
+    sampler = eg.PathSampler.preset("balanced")
+    order = path_order(sampler)
+    assert sorted(order) == list(range(sampler.n_paths))
+    table = sampler.paths
+    kinds = table.kind[order]
+    ranks = [KIND_ORDER.index(k) for k in kinds]
+    assert ranks == sorted(ranks)  # translations, rotations, both: each kind one block
+    moves = table.direction[order][kinds == "translation"]
+    elevation = np.arcsin(np.clip(moves[:, 2], -1, 1))
+    assert np.all(np.diff(elevation) >= -1e-9)  # up the sphere of directions
+
+
+def test_the_descriptor_figure_is_one_colour_scale_with_its_unit(tmp_path):
+    """Two grasps by two 'backends' (the same values, one scaled): panels of paths x steps in
+    path order, every image on the colour scale 0 .. the largest value of all."""
+    import matplotlib.pyplot as plt
+
+    from exactgrasp.view.descriptors import VALUE_LABEL, path_order, plot_descriptors
+
+    sampler = eg.PathSampler(3, 2, 2, n_steps=4)
+    values = np.arange(sampler.n_paths * 4, dtype=float).reshape(sampler.n_paths, 4) / 100
+    made = {
+        (grasp, backend): eg.Descriptor(values * scale, {"sampler": sampler.params})
+        for grasp, scale0 in (("a", 1.0), ("b", 0.5))
+        for backend, scale in (("voxel", scale0), ("exact", 2 * scale0))
+    }
+    fig = plot_descriptors(made)
+    panels = [ax for ax in fig.axes if ax.images]
+    assert [ax.get_title() for ax in panels] == ["a: voxel", "a: exact", "b: voxel", "b: exact"]
+    top = float(values.max() * 2)
+    assert all(ax.images[0].get_clim() == (0.0, top) for ax in panels)
+    np.testing.assert_array_equal(panels[0].images[0].get_array(), values[path_order(sampler)])
+    colour_bars = [ax for ax in fig.axes if ax.get_ylabel() == VALUE_LABEL]
+    assert len(colour_bars) == 1
+    path = tmp_path / "d.png"
+    fig.savefig(path)
+    plt.close(fig)
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -77,38 +77,9 @@ def demo_grasps() -> list[Grasp]:
 
 
 def _plot(descriptors: dict[tuple[str, str], Descriptor], path: Path) -> None:
-    import matplotlib
+    from exactgrasp.view.descriptors import write_descriptor_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    grasp_names = list(dict.fromkeys(g for g, _ in descriptors))
-    backend_names = list(dict.fromkeys(b for _, b in descriptors))
-    fig, axes = plt.subplots(1, len(grasp_names), figsize=(5 * len(grasp_names), 4), squeeze=False)
-    styles = ["-", "--", ":", "-."]
-    for ax, grasp_name in zip(axes[0], grasp_names, strict=True):
-        for b, backend in enumerate(backend_names):
-            d = descriptors.get((grasp_name, backend))
-            if d is None:
-                continue
-            sampler = d.sampler
-            table = sampler.paths
-            chosen = np.flatnonzero(table.kind == "translation")
-            for k, p in enumerate(chosen):
-                ax.plot(
-                    sampler.times,
-                    d.values[p],
-                    styles[b % len(styles)],
-                    color=f"C{k % 10}",
-                    label=backend if k == 0 else None,
-                )
-        ax.set_title(f"{grasp_name}: translation-only paths (colour = path)")
-        ax.set_xlabel("path time t")
-        ax.set_ylabel("intersection / hand volume")
-        ax.legend(title="backend (line style)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    write_descriptor_figure(descriptors, path)
 
 
 def run_demo(
