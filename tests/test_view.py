@@ -77,7 +77,8 @@ def test_every_link_the_object_axes_and_paths_are_traces(shown, grasp):
         assert name in names
         assert f'"name":"{name}"' in text, f"{name!r} is not in the written page"
     meshes = [t for t in figure_of(shown.scene).data if t.type == "mesh3d"]
-    assert len(meshes) == len(grasp.hand.link_names) + 1
+    ghosts = [t for t in meshes if t.name.startswith("object at t=")]
+    assert len(meshes) - len(ghosts) == len(grasp.hand.link_names) + 1
     assert sum(name.startswith("path ") for name in names) == 24
 
 
@@ -277,3 +278,50 @@ def test_the_descriptor_figure_is_one_colour_scale_with_its_unit(tmp_path):
     fig.savefig(path)
     plt.close(fig)
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_legend_has_one_entry_per_group_and_the_axes_give_millimetres(shown, grasp):
+    fig = figure_of(shown.scene)
+    entries = [t.name for t in fig.data if t.showlegend]
+    kinds = {k: sum(p.kind == k for p in shown.scene.paths) for k in ("translation", "both")}
+    n_links = len(grasp.hand.link_names)
+    assert entries[:2] == [f"hand ({n_links} links)", "object"]
+    assert "canonical frame axes" in entries and len(entries) <= 8
+    assert (
+        f"{kinds['both']} paths: both" in entries and f"{kinds['translation']} path" in entries[4]
+    )
+    assert not [t for t in fig.data if t.showlegend and t.name.startswith("path ")]
+    assert fig.layout.legend.groupclick == "togglegroup"
+    # One canonical unit is half the palm frame's depth: 42.5 mm for the Barrett hand.
+    mm = 1000.0 / grasp.frame.scale
+    assert mm == pytest.approx(42.5)
+    assert fig.layout.scene.xaxis.title.text == "x (unit = 42.5 mm)"
+    assert (
+        "canonical frame: 1 unit = 42.5 mm (half the palm frame's depth)" in fig.layout.title.text
+    )
+    # The camera stands back further than plotly's default, so that the titles fit.
+    eye = fig.layout.scene.camera.eye
+    assert np.linalg.norm([eye.x, eye.y, eye.z]) > 2.2
+
+
+def test_ghosts_show_the_object_turning_along_the_path_that_rotates_it_most(grasp):
+    from exactgrasp.geometry.se3 import exp_se3
+    from exactgrasp.view.scene import GHOST_FRACTIONS
+
+    scene = build_scene(grasp, "balanced", n_paths=24)
+    object_mesh = next(m for m in scene.meshes if m.role == "object")
+    assert len(scene.ghosts) == len(GHOST_FRACTIONS)
+    drawn = [p.index for p in scene.paths]
+    sampler = eg.PathSampler.preset("balanced")
+    amounts = np.abs(sampler.paths.amount[drawn])
+    index = drawn[int(np.argmax(amounts))]
+    assert all(g.name.endswith(f" on path {index}") for g in scene.ghosts)
+    last = scene.ghosts[-1]
+    t = float(sampler.times.max())
+    pose = exp_se3(sampler.paths.omega[index] * t, sampler.paths.direction[index] * t)
+    np.testing.assert_allclose(
+        last.vertices, object_mesh.vertices @ pose[:3, :3].T + pose[:3, 3], atol=1e-12
+    )
+    # It turns: the copy is not the grasp's object shifted.
+    shift = last.vertices.mean(axis=0) - object_mesh.vertices.mean(axis=0)
+    assert np.abs(last.vertices - (object_mesh.vertices + shift)).max() > 0.05
