@@ -25,7 +25,8 @@ docs/performance.md for the measurements and the rules that keep compilation sho
 It also watches numba's ``numba:compile`` event, which numba fires only when it compiles a
 function (a cache miss), never when a kernel loads from its on-disk cache. The first time in a
 process that a kernel of one family (`COMPILE_SECONDS`) compiles, one line goes to stderr,
-``compiling exactgrasp kernels (exact backend), first use only (20-45 s)``, above any
+``compiling exactgrasp kernels (exact backend), first use only (20-45 s on an idle 2-core
+machine, longer on a busy one)``, above any
 progress bar, whether or not stderr is a terminal (a log then says why the first call took
 long); a non-empty ``EXACTGRASP_NO_PROGRESS`` silences it. `compile_seconds` counts the time
 spent compiling, which timings report apart; `on_compile` tells the progress bars. Layer 0:
@@ -52,6 +53,7 @@ from numba.core.registry import CPUDispatcher
 __all__ = [
     "COMPILE_SECONDS",
     "KERNEL_PACKAGES",
+    "NOTICE",
     "compile_seconds",
     "inner",
     "kernel",
@@ -156,7 +158,12 @@ def inner(**options: Any):
 #: Seconds each family of kernels takes to compile from an empty cache, fewest to most, as
 #: the notice announces them: the range measured on the reference 2-core machine, quiet to
 #: shared with other jobs (``benchmarks/cold_start.py``; "Cold start" in docs/performance.md).
-COMPILE_SECONDS = {"exact backend": (20, 45), "voxel estimator": (4, 10), "geometry": (2, 5)}
+COMPILE_SECONDS = {"exact backend": (20, 45), "voxel estimator": (5, 10), "geometry": (2, 5)}
+#: The notice, once per family and process.
+NOTICE = (
+    "compiling exactgrasp kernels ({family}), first use only ({fewest}-{most} s on an idle "
+    "2-core machine, longer on a busy one)"
+)
 
 # The family of a kernel is that of the package module that calls it from Python (module
 # prefix -> family, first match), else of the module that defines it.
@@ -221,10 +228,7 @@ class _CompileWatch(event.Listener):
                 from tqdm.auto import tqdm  # writes above any open bar
 
                 fewest, most = COMPILE_SECONDS[family]
-                tqdm.write(
-                    f"compiling exactgrasp kernels ({family}), first use only ({fewest}-{most} s)",
-                    file=sys.stderr,
-                )
+                tqdm.write(NOTICE.format(family=family, fewest=fewest, most=most), file=sys.stderr)
             self._call_hooks(True)
         except Exception:
             pass
