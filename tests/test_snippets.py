@@ -114,7 +114,7 @@ def test_the_tutorial_runs_as_written(tmp_path):
         assert line in page, line
         assert line.split("0.39")[-1] in out, line  # the seconds drift; the values do not
     assert "6 grasps: 6 done, 0 failed" in out
-    for picture in ("descriptors.png", "juice_box.png"):
+    for picture in ("descriptors.png", "juice_box.png", "all-descriptors.png"):
         assert (work / picture).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (work / "juice_box.html").stat().st_size > 100_000
     assert "UserWarning" not in done.stderr, done.stderr[-3000:]
