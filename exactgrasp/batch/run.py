@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import sys
 import time
 from collections import deque
 from dataclasses import dataclass
@@ -137,6 +138,23 @@ def _run_params(manifest: Manifest, engine: Backend, sampler: PathSampler, **ext
 
 
 @ignores_third_party_warnings
+def _refuse_unguarded_script() -> None:
+    """Refuse a call made while a spawned worker re-runs the calling script: its top level
+    lacks the ``__main__`` guard, and the call would otherwise start a cluster inside each
+    worker, which fails with a message about a folder in use and a nanny."""
+    frame = sys._getframe(2)
+    while frame is not None:
+        if frame.f_globals.get("__name__") == "__mp_main__":
+            script = frame.f_globals.get("__file__", "the script")
+            raise BatchError(
+                f"run_batch was called while a worker process imported {script}: run_batch "
+                "starts worker processes, which import the script that calls it, so its top "
+                'level must be guarded: put the call under `if __name__ == "__main__":` '
+                "(see docs/batch.md)."
+            )
+        frame = frame.f_back
+
+
 def run_batch(
     manifest: str | os.PathLike,
     out: str | os.PathLike,
@@ -199,6 +217,7 @@ def run_batch(
         A ``sampler`` that `exactgrasp.paths.as_sampler` does not take.
     """
     started = time.perf_counter()
+    _refuse_unguarded_script()
     if scheduler is not None and workers is not None:
         raise BatchError("workers= sets up a local cluster; with scheduler= use its workers.")
     for name, value, low in (("workers", workers, 0), ("part_size", part_size, 1)):
