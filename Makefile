@@ -10,6 +10,9 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e ".[all,dev]"
+	@# Compile the numba kernels here, once (numba caches them), so that the timings of
+	@# `make demo` and of the first runs are those of warm kernels.
+	$(BIN)/exactgrasp demo --quick --no-progress --out $(VENV)/compiled-kernels >/dev/null
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -10,8 +10,8 @@ The public names::
 
 from __future__ import annotations
 
-from exactgrasp.backends import Backend, available_backends, get_backend, register_backend
-from exactgrasp.descriptor import Descriptor, compute_descriptor, distance, pairwise_distances
+from typing import TYPE_CHECKING
+
 from exactgrasp.errors import (
     BackendError,
     BatchError,
@@ -30,36 +30,62 @@ from exactgrasp.errors import (
     SamplerError,
     UncertainCrossingError,
 )
-from exactgrasp.geometry import objects
-from exactgrasp.geometry.solid import Solid
-from exactgrasp.grasp import Grasp
-from exactgrasp.grasp.noise import joint_noise, object_pose_noise
-from exactgrasp.hands.frame import HandFrame
-from exactgrasp.hands.hand import Hand
-from exactgrasp.paths.sampler import PathSampler
+from exactgrasp.lazy import lazy_names
 from exactgrasp.version import __version__
 
+if TYPE_CHECKING:
+    from exactgrasp import hands
+    from exactgrasp.backends import Backend, available_backends, get_backend, register_backend
+    from exactgrasp.batch import read_batch, run_batch
+    from exactgrasp.compare import compare_backends
+    from exactgrasp.descriptor import (
+        Descriptor,
+        compute_descriptor,
+        distance,
+        pairwise_distances,
+    )
+    from exactgrasp.geometry import objects
+    from exactgrasp.geometry.solid import Solid
+    from exactgrasp.grasp import Grasp
+    from exactgrasp.grasp.closing import close_fingers
+    from exactgrasp.grasp.noise import joint_noise, object_pose_noise
+    from exactgrasp.hands.frame import HandFrame
+    from exactgrasp.hands.hand import Hand
+    from exactgrasp.overlap import intersection, intersection_volume
+    from exactgrasp.paths.sampler import PathSampler
+    from exactgrasp.view import show
 
-def __getattr__(name: str):
-    # Modules that pull in heavier optional packages load on first use.
-    import importlib
-
-    lazy = {
-        "hands": ("exactgrasp.hands", None),
-        "close_fingers": ("exactgrasp.grasp.closing", "close_fingers"),
-        "compare_backends": ("exactgrasp.compare", "compare_backends"),
-        "run_batch": ("exactgrasp.batch", "run_batch"),
-        "read_batch": ("exactgrasp.batch", "read_batch"),
-        "intersection": ("exactgrasp.overlap", "intersection"),
-        "intersection_volume": ("exactgrasp.overlap", "intersection_volume"),
-        "show": ("exactgrasp.view", "show"),
-    }
-    if name in lazy:
-        module_name, attr = lazy[name]
-        module = importlib.import_module(module_name)
-        return module if attr is None else getattr(module, attr)
-    raise AttributeError(f"module 'exactgrasp' has no attribute {name!r}")
-
+# Every other public name loads on first use (`exactgrasp.lazy`): ``import exactgrasp`` and the
+# command line's ``--help`` do not pay for numba, trimesh, scipy and mujoco.
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    {
+        "exactgrasp.backends": (
+            "Backend",
+            "available_backends",
+            "get_backend",
+            "register_backend",
+        ),
+        "exactgrasp.descriptor": (
+            "Descriptor",
+            "compute_descriptor",
+            "distance",
+            "pairwise_distances",
+        ),
+        "exactgrasp.geometry.solid": ("Solid",),
+        "exactgrasp.grasp": ("Grasp",),
+        "exactgrasp.grasp.noise": ("joint_noise", "object_pose_noise"),
+        "exactgrasp.hands.frame": ("HandFrame",),
+        "exactgrasp.hands.hand": ("Hand",),
+        "exactgrasp.paths.sampler": ("PathSampler",),
+        "exactgrasp.grasp.closing": ("close_fingers",),
+        "exactgrasp.compare": ("compare_backends",),
+        "exactgrasp.batch": ("run_batch", "read_batch"),
+        "exactgrasp.overlap": ("intersection", "intersection_volume"),
+        "exactgrasp.view": ("show",),
+    },
+    {"hands": "exactgrasp.hands", "objects": "exactgrasp.geometry.objects"},
+)
 
 __all__ = [
     "Backend",

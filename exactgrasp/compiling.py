@@ -20,23 +20,46 @@ numba's on-disk cache) plus two rules that cut compile time without changing a r
 
 Import this module's decorators in every kernel module; see "Cold start" in
 docs/performance.md for the measurements and the rules that keep compilation short (no
-``inline="always"``, writable arrays, no numba sorts). Layer 0: imports nothing from
-exactgrasp.
+``inline="always"``, writable arrays, no numba sorts).
+
+It also watches numba's ``numba:compile`` event, which numba fires only when it compiles a
+function (a cache miss), never when a kernel loads from its on-disk cache. The first time in a
+process that a kernel of one family (`COMPILE_SECONDS`) compiles, one line goes to stderr,
+``compiling exactgrasp kernels (exact backend), first use only (20-45 s on an idle 2-core
+machine, longer on a busy one)``, above any
+progress bar, whether or not stderr is a terminal (a log then says why the first call took
+long); a non-empty ``EXACTGRASP_NO_PROGRESS`` silences it. `compile_seconds` counts the time
+spent compiling, which timings report apart; `on_compile` tells the progress bars. Layer 0:
+imports nothing from exactgrasp.
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
+import sys
+import threading
+import time
+from collections.abc import Callable
 from functools import cache
 from pathlib import Path
 from typing import Any
 
 import numba
-from numba.core import errors, types
+from numba.core import errors, event, types
 from numba.core.caching import FunctionCache
 from numba.core.registry import CPUDispatcher
 
-__all__ = ["KERNEL_PACKAGES", "inner", "kernel", "kernel_sources_digest"]
+__all__ = [
+    "COMPILE_SECONDS",
+    "KERNEL_PACKAGES",
+    "NOTICE",
+    "compile_seconds",
+    "inner",
+    "kernel",
+    "kernel_sources_digest",
+    "on_compile",
+]
 
 _NO_WRAPPERS = ("no_cpython_wrapper", "no_cfunc_wrapper")
 
@@ -128,3 +151,116 @@ def inner(**options: Any):
         Any ``numba.njit`` option (``nogil``, ``error_model``, ...).
     """
     return _make(_Inner, {**options, **dict.fromkeys(_NO_WRAPPERS, True)})
+
+
+# -- the compile notice and the time spent compiling -------------------------------------------
+
+#: Seconds each family of kernels takes to compile from an empty cache, fewest to most, as
+#: the notice announces them: the range measured on the reference 2-core machine, quiet to
+#: shared with other jobs (``benchmarks/cold_start.py``; "Cold start" in docs/performance.md).
+COMPILE_SECONDS = {"exact backend": (20, 45), "voxel estimator": (5, 10), "geometry": (2, 5)}
+#: The notice, once per family and process.
+NOTICE = (
+    "compiling exactgrasp kernels ({family}), first use only ({fewest}-{most} s on an idle "
+    "2-core machine, longer on a busy one)"
+)
+
+# The family of a kernel is that of the package module that calls it from Python (module
+# prefix -> family, first match), else of the module that defines it.
+_FAMILIES = (
+    ("exactgrasp.backends.exact", "exact backend"),
+    ("exactgrasp.backends.voxel", "voxel estimator"),
+    ("exactgrasp.", "geometry"),
+)
+
+
+def _family(dispatcher) -> str | None:
+    """The family of the kernel being compiled, or None for a function outside the package."""
+    own = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
+    if not own.startswith("exactgrasp."):
+        return None
+    caller = own
+    frame = sys._getframe(1)
+    while frame is not None:
+        name = frame.f_globals.get("__name__", "")
+        # Above numba's own frames, the first package frame is the kernel's Python caller.
+        if name.startswith("exactgrasp.") and name != __name__:
+            caller = name
+            break
+        frame = frame.f_back
+    return next(family for prefix, family in _FAMILIES if caller.startswith(prefix))
+
+
+class _CompileWatch(event.Listener):
+    """Prints the notice when a family first compiles, counts the seconds spent compiling
+    (outermost compilations) and calls the `on_compile` hooks."""
+
+    def __init__(self):
+        self.depth = 0
+        self.started = 0.0
+        self.total = 0.0
+        self.announced: set[str | None] = set()
+        self.hooks: list[Callable[[bool], Any]] = []
+        self.lock = threading.Lock()
+
+    def seconds(self) -> float:
+        with self.lock:
+            running = time.perf_counter() - self.started if self.depth else 0.0
+            return self.total + running
+
+    def _call_hooks(self, started: bool) -> None:
+        for hook in list(self.hooks):
+            hook(started)
+
+    def on_start(self, ev: event.Event) -> None:
+        # Never break a compilation: any error here is dropped.
+        try:
+            with self.lock:
+                self.depth += 1
+                if self.depth != 1:
+                    return
+                self.started = time.perf_counter()
+                quiet = bool(os.environ.get("EXACTGRASP_NO_PROGRESS"))
+                family = None if quiet else _family(ev.data.get("dispatcher"))
+                first = family is not None and family not in self.announced
+                self.announced.add(family)
+            if first:
+                from tqdm.auto import tqdm  # writes above any open bar
+
+                fewest, most = COMPILE_SECONDS[family]
+                tqdm.write(NOTICE.format(family=family, fewest=fewest, most=most), file=sys.stderr)
+            self._call_hooks(True)
+        except Exception:
+            pass
+
+    def on_end(self, ev: event.Event) -> None:
+        try:
+            with self.lock:
+                self.depth -= 1
+                if self.depth:
+                    return
+                self.total += time.perf_counter() - self.started
+            self._call_hooks(False)
+        except Exception:
+            pass
+
+
+_WATCH = _CompileWatch()
+event.register("numba:compile", _WATCH)
+
+
+def compile_seconds() -> float:
+    """Wall seconds this process has spent compiling numba functions so far (outermost
+    compilations, the one running included; loading a kernel from numba's cache is not
+    compiling).
+
+    The difference of two calls is the compile time of what ran in between, which
+    ``Descriptor.metadata["compile_seconds"]`` and the command line report apart.
+    """
+    return _WATCH.seconds()
+
+
+def on_compile(hook: Callable[[bool], Any]) -> None:
+    """Call ``hook(True)`` when an outermost compilation starts and ``hook(False)`` when it
+    ends (the progress bars' way to show it)."""
+    _WATCH.hooks.append(hook)

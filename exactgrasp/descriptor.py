@@ -20,7 +20,7 @@ from exactgrasp.errors import DescriptorError
 from exactgrasp.grasp import Grasp
 from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
-from exactgrasp.progress import progress_bar
+from exactgrasp.progress import compile_seconds, progress_bar
 
 DISTANCE_KINDS = ("l2", "l2_diff")
 
@@ -34,7 +34,9 @@ class Descriptor:
         Intersection volume / hand volume at each pose (dimensionless, >= 0).
     metadata : dict
         How it was made: ``sampler``, ``backend``, ``backend_params``, ``version``,
-        ``hand_hash``, ``object_hash``, ``grasp``, ``hand_volume``, ``seconds``, and the
+        ``hand_hash``, ``object_hash``, ``grasp``, ``hand_volume``, ``seconds`` (wall
+        seconds), ``compile_seconds`` (of them, those spent compiling the kernels: first use
+        in a process only), and the
         checks of `exactgrasp.diagnostics.check_descriptor` (``max_value``,
         ``volume_ratio``, ``warnings``, ...).
 
@@ -124,6 +126,8 @@ def compute_volumes(
     poses = check_poses(poses)
     flat = poses.reshape(-1, 4, 4)
     first, back = np.unique(repeated_poses(flat), return_inverse=True)
+    if len(first) < len(flat):  # the bar counts the poses computed: say why it counts fewer
+        description += f" ({len(first):,} distinct of {len(flat):,}: repeats computed once)"
     with progress_bar(total=len(first), desc=description, enable=progress) as bar:
         advance = None if bar.disable else bar.update
         volumes = backend.volumes_with_progress(grasp, flat[first], advance)
@@ -166,7 +170,7 @@ def compute_descriptor(
 
     sampler = as_sampler(sampler)
     backend = get_backend(backend, **backend_params)
-    start = time.perf_counter()
+    start, compiling = time.perf_counter(), compile_seconds()
     volumes = compute_volumes(grasp, sampler.poses(), backend, progress, f"{backend.name} poses")
     # The backend's own union where it has one (the exact backend's), not a second one.
     hand_volume = float(backend.hand_volume(grasp))
@@ -177,6 +181,7 @@ def compute_descriptor(
             f"grasp {grasp.name!r}; this is a bug in the backend, please report it."
         )
     seconds = time.perf_counter() - start
+    compiled = min(compile_seconds() - compiling, seconds)
     metadata = {
         "grasp": grasp.name,
         "sampler": sampler.params,
@@ -190,6 +195,7 @@ def compute_descriptor(
         "hand_volume_m3": hand_volume / grasp.frame.scale**3,
         "frame": grasp.frame.to_dict(),
         "seconds": seconds,
+        "compile_seconds": compiled,
     }
     values = volumes / hand_volume
     # Warn once about suspicious grasps and record the checks (docs/diagnostics.md).

@@ -19,7 +19,6 @@ from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from exactgrasp.cache import LRUCache
 from exactgrasp.errors import warn_caller
@@ -32,6 +31,7 @@ __all__ = [
     "GAP_TOLERANCE",
     "MINKOWSKI_POINTS",
     "PENETRATION_LIMIT",
+    "SIZE_RATIO_RANGE",
     "THIRD_PARTY_PACKAGES",
     "VALUE_LIMIT",
     "VALUE_TOLERANCE",
@@ -49,6 +49,11 @@ PENETRATION_LIMIT = 0.10
 VALUE_LIMIT = 1.0
 #: Relative slack on `VALUE_LIMIT`: the exact backend's agreement with manifold3d's boolean.
 VALUE_TOLERANCE = 1e-9
+#: Plausible range of the object's size over the hand's (longest sides of their bounding boxes,
+#: the hand posed): a grasped object from a few millimetres to a few metres beside a 25 cm hand.
+#: A units mistake moves the ratio by 10 (cm), 25.4 (inch) or 1000 (mm): outside this range the
+#: descriptor is warned about, naming the likely mistake.
+SIZE_RATIO_RANGE = (0.01, 10.0)
 #: Convex hulls closer than this (m) are taken to touch.
 GAP_TOLERANCE = 1e-9
 #: Most points of the Minkowski difference `hull_gap` builds; above it, the larger hull's
@@ -106,9 +111,11 @@ def ignores_third_party_warnings(function: Callable) -> Callable:
 
 def _hull_vertices(points: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """(vertices (k, 3), facet equations (f, 4)) of the convex hull, None when degenerate."""
+    from scipy import spatial  # here, not above: the command line's --help imports this module
+
     try:
-        hull = ConvexHull(points)
-    except (QhullError, ValueError):
+        hull = spatial.ConvexHull(points)
+    except (spatial.QhullError, ValueError):
         return None
     return points[hull.vertices], hull.equations
 
@@ -174,10 +181,12 @@ def _gap(hull_a: tuple, hull_b: tuple) -> float:
         many, few = (va, vb) if len(va) >= len(vb) else (vb, va)
         step = -(-len(many) * len(few) // MINKOWSKI_POINTS)
         va, vb = (many[::step], few) if many is va else (few, many[::step])
+    from scipy import spatial
+
     difference = (va[:, None, :] - vb[None, :, :]).reshape(-1, 3)
     try:
-        hull = ConvexHull(difference)
-    except QhullError:
+        hull = spatial.ConvexHull(difference)
+    except spatial.QhullError:
         return 0.0
     if np.all(hull.equations[:, 3] <= 0.0):  # the origin is inside: the hulls meet
         return 0.0
@@ -232,9 +241,11 @@ def check_descriptor(
 ) -> dict[str, Any]:
     """Check a grasp and its descriptor values; warn once per finding.
 
-    Warns when the object does not reach the convex hull of the hand (every value is then 0),
-    when every value is 0 for another reason, when the object overlaps the hand at the grasp
-    pose by more than `PENETRATION_LIMIT` of the smaller volume, and when a value exceeds
+    Warns when the object is implausibly small or large beside the hand
+    (`SIZE_RATIO_RANGE`: usually a units mistake), when the object does not reach the convex
+    hull of the hand (every value is then 0), when every value is 0 for another reason, when
+    the object overlaps the hand at the grasp pose by more than `PENETRATION_LIMIT` of the
+    smaller volume, and when a value exceeds
     `VALUE_LIMIT`.
 
     Parameters
@@ -252,7 +263,8 @@ def check_descriptor(
     -------
     dict
         Metadata entries: ``max_value`` (the largest value), ``volume_ratio`` (object volume
-        / hand volume), ``hull_gap_m`` (m, 0 when the object reaches the hand's convex hull),
+        / hand volume), ``size_ratio`` (the object's longest bounding-box side over the posed
+        hand's), ``hull_gap_m`` (m, 0 when the object reaches the hand's convex hull),
         ``grasp_overlap`` (hand ∩ object at the grasp pose / the smaller volume, as
         ``backend`` measures it), ``warnings`` (the messages issued, a list of str).
     """
@@ -264,7 +276,8 @@ def check_descriptor(
     ratio = object_volume / hand_volume
     gap = grasp_hull_gap(grasp)
     overlap = 0.0
-    messages = []
+    size_ratio, size_message = _size_check(grasp, name)
+    messages = [size_message] if size_message else []
     if gap > GAP_TOLERANCE:
         messages.append(
             f"{name}: the object does not reach the hand's convex hull (it is {_length(gap)} "
@@ -302,10 +315,47 @@ def check_descriptor(
     return {
         "max_value": max_value,
         "volume_ratio": ratio,
+        "size_ratio": size_ratio,
         "hull_gap_m": gap,
         "grasp_overlap": overlap,
         "warnings": messages,
     }
+
+
+def _size_check(grasp: Grasp, name: str) -> tuple[float, str | None]:
+    """The object's size over the hand's, and the warning when it is outside
+    `SIZE_RATIO_RANGE` (None inside)."""
+    hull = _hand_hull(grasp)
+    hand_vertices = (
+        hull[0] if hull is not None else np.concatenate([v for v, _ in grasp.hand.link_arrays()])
+    )
+    hand_size = float(np.ptp(hand_vertices, axis=0).max())
+    object_size = grasp.object.extent
+    ratio = object_size / hand_size
+    low, high = SIZE_RATIO_RANGE
+    sizes = f"the object is {_size(object_size)} across, the hand {_size(hand_size)}"
+    fix = (
+        "check the units the object and the hand were read in (units= of Solid.from_file and "
+        'Hand.from_file, "object_units" in a grasp file, --units on the command line).'
+    )
+    if ratio < low:
+        return ratio, (
+            f"{name}: the object is {1 / ratio:,.0f} times smaller than the hand ({sizes}); an "
+            "object modelled in metres and read as millimetres (units='mm'), or a hand "
+            f"modelled in millimetres and read as metres, looks like this; {fix}"
+        )
+    if ratio > high:
+        return ratio, (
+            f"{name}: the object is {ratio:,.3g} times larger than the hand ({sizes}); an "
+            "object modelled in centimetres or inches and read as metres (units='m', the "
+            "default), or a hand modelled in metres and read as millimetres, looks like this; "
+            f"{fix}"
+        )
+    return ratio, None
+
+
+def _size(metres: float) -> str:
+    return f"{metres * 1000:.3g} mm" if metres < 1.0 else f"{metres:.3g} m"
 
 
 def _length(metres: float) -> str:

@@ -24,10 +24,11 @@ LAYERS = {
     "errors": 0,
     "version": 0,
     "cache": 0,
-    "progress": 0,
     "datapath": 0,
     "compiling": 0,
+    "lazy": 0,
     "geometry": 1,
+    "progress": 1,
     "hands": 2,
     "paths": 2,
     "grasp": 3,
@@ -55,9 +56,14 @@ def modules() -> dict[str, Path]:
 
 MODULES = modules()
 
-#: The lazy public names, the backend registry (entry points) and `require` of optional
-#: packages are the only places that import by name at run time.
-DYNAMIC_IMPORTERS = {"exactgrasp", "exactgrasp.backends.registry", "exactgrasp.errors"}
+#: The lazy public names (`exactgrasp.lazy`), the backend registry (entry points) and `require`
+#: of optional packages are the only places that import by name at run time.
+DYNAMIC_IMPORTERS = {
+    "exactgrasp",
+    "exactgrasp.backends.registry",
+    "exactgrasp.errors",
+    "exactgrasp.lazy",
+}
 
 
 def room(module: str) -> str:

@@ -335,3 +335,31 @@ def test_units_and_repair_override_the_grasp_files(tmp_path):
     np.testing.assert_allclose(np.asarray(values[0]).reshape(expected.shape), expected, rtol=1e-6)
     with pytest.raises(BatchError, match="units must be one of"):
         _run(manifest, tmp_path / "bad", workers=0, units="furlong")
+
+
+def test_a_script_without_the_main_guard_is_told_the_fix(tmp_path):
+    """docs/batch.md's block without its `if __name__ == "__main__":`: each spawned worker
+    re-runs the script; its run_batch call says what is wrong and the fix, instead of a
+    message about the output folder being in use."""
+    pytest.importorskip("distributed")
+    pose = np.eye(4)
+    pose[2, 3] = 0.125
+    eg.Grasp(hands.barrett(), objects.box((0.06, 0.1, 0.1)), pose, name="g0").save(
+        tmp_path / "g0.json"
+    )
+    (tmp_path / "grasps.jsonl").write_text('{"id": "g0", "grasp": "g0.json"}\n')
+    (tmp_path / "script.py").write_text(
+        "from exactgrasp.batch import run_batch\n\n"
+        'summary = run_batch("grasps.jsonl", "run2", sampler={"n_translations": 3, '
+        '"n_axes": 2, "n_amounts": 2, "n_steps": 3}, workers=1)\n'
+    )
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    done = subprocess.run(
+        [sys.executable, "script.py"], cwd=tmp_path, env=env, capture_output=True, text=True,
+        timeout=300,
+    )  # fmt: skip
+    assert done.returncode != 0
+    script = tmp_path / "script.py"
+    assert f"run_batch was called while a worker process imported {script}" in done.stderr
+    assert 'put the call under `if __name__ == "__main__":`' in done.stderr
+    assert "in use by another" not in done.stderr

@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 from typing import ClassVar
 
@@ -129,6 +131,11 @@ def test_demo_quick(tmp_path, capsys):
     assert {"can", "box", "jug handle"} <= {row["grasp"] for row in summary}
     png = (tmp_path / "demo" / "descriptors.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
+    import matplotlib.image
+
+    # paths x steps images of four grasps (rows) by two backends: a tall figure, not a strip
+    image = matplotlib.image.imread(tmp_path / "demo" / "descriptors.png")
+    assert image.shape[0] > image.shape[1] > 600
     assert "seconds" in out
 
 
@@ -541,3 +548,101 @@ def test_fixes_are_spelled_as_flags_from_their_fields():
     # the whole message, the same parts in the command's words
     error = MeshError("m: ", Fix("repair", True, "pass"), " to close it")
     assert str(error.respelled(GRASP_TERMS, "A: ")) == "A: m: pass --repair to close it"
+
+
+# -- --help: fast, with an example --------------------------------------------------------------
+
+#: What ``--help`` must not load: the numerical and optional libraries behind the commands.
+HEAVY = ("numba", "trimesh", "scipy", "mujoco", "manifold3d", "matplotlib", "plotly", "dask",
+         "coal", "fcl", "pyarrow")  # fmt: skip
+COMMANDS = ("demo", "descriptor", "compare", "close", "inspect", "show", "overlap", "validate",
+            "batch")  # fmt: skip
+
+
+def test_help_loads_none_of_the_numerical_libraries():
+    """``exactgrasp --help`` and every command's ``--help``, each in a fresh interpreter: the
+    modules loaded are read from ``sys.modules`` (benchmarks/cli_help.py times them)."""
+    script = textwrap.dedent(
+        """
+        import contextlib, io, json, sys
+        from exactgrasp.cli import main
+        argv = sys.argv[1:]
+        with contextlib.redirect_stdout(io.StringIO()) as out:
+            try:
+                main([*argv, "--help"])
+            except SystemExit:
+                pass
+        loaded = sorted({m.split(".")[0] for m in sys.modules})
+        print(json.dumps({"loaded": loaded, "help": out.getvalue()}))
+        """
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    for argv in ([], *([c] for c in COMMANDS)):
+        done = subprocess.run(
+            [sys.executable, "-c", script, *argv], capture_output=True, text=True, env=env
+        )
+        assert done.returncode == 0, done.stderr[-2000:]
+        result = json.loads(done.stdout)
+        assert not set(HEAVY) & set(result["loaded"]), (argv, set(HEAVY) & set(result["loaded"]))
+        text = " ".join(result["help"].split())
+        assert "docs/cli.md" in text and "docs/tutorial.md" in text, argv
+        if argv:
+            assert f"Example: exactgrasp {argv[0]} " in text, argv
+        if argv and argv[0] in ("demo", "descriptor", "compare", "batch"):
+            assert "object_resolution" in text and "broadphase" in text, argv  # --param table
+
+
+def test_a_missing_palm_frame_has_one_fix_in_the_error_and_in_inspect(tmp_path, capsys):
+    """The tutorial's hand without its palm_frame.json: `Hand.from_urdf` and `inspect` give
+    the same fix, naming the file to write beside the model."""
+    from exactgrasp.datapath import examples_dir
+
+    urdf = tmp_path / "two_finger.urdf"
+    urdf.write_text((examples_dir() / "hand" / "two_finger.urdf").read_text())
+    with pytest.raises(eg.FrameError) as caught:
+        eg.Hand.from_urdf(urdf)
+    error = str(caught.value)
+    prefix = "two_finger has no palm frame; "
+    assert error.startswith(prefix + f"write the palm frame into {tmp_path / 'palm_frame.json'}: ")
+    fix = error.removeprefix(prefix).removesuffix(".")
+    assert main(["inspect", str(urdf)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert f"  palm frame: none; {fix}" in lines
+    assert '{"origin": [x, y, z], "normal": [x, y, z], "up": [x, y, z], "depth": d}' in fix
+    assert "docs/tutorial.md" in fix
+    # Written as it says, the model loads, with that frame.
+    (tmp_path / "palm_frame.json").write_text(
+        json.dumps({"origin": [0, 0, 0.03], "normal": [0, 0, 1], "up": [0, 1, 0], "depth": 0.08})
+    )
+    assert eg.Hand.from_urdf(urdf).frame.scale == pytest.approx(2 / 0.08)
+
+
+def test_quick_is_documented_with_the_paths_it_runs():
+    from exactgrasp.cli.demo import QUICK_SAMPLER
+    from exactgrasp.paths.presets import as_sampler
+
+    quick = as_sampler(QUICK_SAMPLER)
+    kinds = dict(zip(*np.unique(quick.paths.kind, return_counts=True), strict=True))
+    assert (quick.n_paths, quick.n_steps) == (34, 5)
+    assert kinds == {"translation": 6, "rotation": 4, "both": 24}
+    assert "a small sampler (34 paths x 5 steps)" in " ".join(_help("demo").split())
+    cli_page = " ".join((ROOT / "docs" / "cli.md").read_text().split())
+    assert "a small sampler (34 paths x 5 steps: 6 translations, 4 rotations and 24" in cli_page
+
+
+def test_compare_of_different_samplers_names_each_file(grasp_file, tmp_path, capsys):
+    small = '{"n_translations": 3, "n_axes": 2, "n_amounts": 2, "n_steps": 3}'
+    a, b = tmp_path / "a.npz", tmp_path / "b.npz"
+    assert main(["descriptor", str(grasp_file), "-o", str(a), "--sampler", small, *COARSE]) == 0
+    argv = ["descriptor", str(grasp_file), "-o", str(b), "--sampler", small, "--steps", "4"]
+    assert main([*argv, *COARSE]) == 0
+    capsys.readouterr()
+    err = " ".join(_error(capsys, ["compare", str(a), str(b)]).split())
+    assert f"{a} and {b} come from different samplers" in err
+    assert f"{a}: 19 paths x 3 steps, sampler " in err and f"{b}: 19 paths x 4 steps" in err
+    # The command it suggests gives a descriptor the first one compares with.
+    suggested = re.search(r"--sampler '(\{.*?\})'", err).group(1)
+    c = tmp_path / "c.npz"
+    argv = ["descriptor", str(grasp_file), "-o", str(c), "--sampler", suggested, *COARSE]
+    assert main(argv) == 0
+    assert main(["compare", str(a), str(c)]) == 0

@@ -3,6 +3,7 @@ import pytest
 
 import exactgrasp as eg
 from exactgrasp import backends as registry
+from exactgrasp.backends.base import repeated_poses
 from exactgrasp.descriptor import DescriptorError
 from tests.conftest import box_grasp
 
@@ -215,3 +216,57 @@ def test_compare_backends_table_and_summary(grasp, tmp_path):
     parquet = pq.read_table(write_table(table, tmp_path / "t.parquet"))
     assert parquet.num_rows == sampler.n_poses
     np.testing.assert_array_equal(parquet.column("value_shift0").to_numpy(), est)
+
+
+class CompilingBackend(ShiftBackend):
+    """`ShiftBackend` whose first call spends 0.4 s 'compiling': numba's compile event around
+    a sleep, as a kernel's first call is seen."""
+
+    name = "compiling"
+    compiled = False
+
+    def volumes(self, grasp, poses):
+        import time
+
+        from numba.core import event
+
+        if not CompilingBackend.compiled:
+            CompilingBackend.compiled = True
+            event.start_event("numba:compile", data={"dispatcher": None})
+            time.sleep(0.4)
+            event.end_event("numba:compile", data={"dispatcher": None})
+        return super().volumes(grasp, poses)
+
+
+def test_compile_time_is_reported_apart(grasp):
+    from exactgrasp.cli.common import timing
+
+    CompilingBackend.compiled = False
+    sampler = eg.PathSampler(3, 2, 2, n_steps=4)
+    first = eg.compute_descriptor(grasp, sampler, backend=CompilingBackend())
+    meta = first.metadata
+    assert 0.4 <= meta["compile_seconds"] < 1.0 and meta["seconds"] > meta["compile_seconds"]
+    again = eg.compute_descriptor(grasp, sampler, backend=CompilingBackend())
+    assert again.metadata["compile_seconds"] == 0.0
+    assert timing({"seconds": 10.0, "compile_seconds": 7.5}) == (
+        "in 2.50 s (and 7.5 s compiling the kernels, first use only)"
+    )
+    assert timing({"seconds": 1.25, "compile_seconds": 0.0}) == "in 1.25 s"
+    # compare: the seconds of its table leave compiling out, and a line says how long it took.
+    CompilingBackend.compiled = False
+    result = eg.compare_backends(grasp, sampler, backends=[CompilingBackend(), ShiftBackend()])
+    assert 0.4 <= result.compile_seconds["compiling"] < 1.0
+    assert result.seconds["compiling"] < 0.4
+    text = result.summary_text()
+    assert "compiling the kernels (first use only) took compiling 0." in text
+
+
+def test_the_progress_bar_says_why_it_counts_fewer_poses(grasp, capsys):
+    """The balanced preset repeats poses; the bar counts those computed, and says so."""
+    sampler = eg.PathSampler.preset("balanced", n_steps=3)
+    eg.compute_descriptor(grasp, sampler, backend="shift", progress=True)
+    err = capsys.readouterr().err
+    distinct = len(np.unique(repeated_poses(sampler.poses().reshape(-1, 4, 4))))
+    assert distinct < sampler.n_poses == 474 * 3
+    expected = f"shift poses ({distinct:,} distinct of {sampler.n_poses:,}: repeats computed once)"
+    assert expected in err

@@ -33,7 +33,7 @@ SAMPLER = eg.PathSampler(3, 2, 2, n_steps=3)
 PARAMS = {"object_resolution": 16, "hand_resolution": 24}
 PALM_TOP = 0.08  # m, hand coordinates of eg.hands.barrett()
 BOX = (0.06, 0.1, 0.1)
-KEYS = ("max_value", "volume_ratio", "hull_gap_m", "grasp_overlap", "warnings")
+KEYS = ("max_value", "volume_ratio", "size_ratio", "hull_gap_m", "grasp_overlap", "warnings")
 
 
 def box_grasp(bottom: float, size=BOX, name: str = "box") -> eg.Grasp:
@@ -305,3 +305,46 @@ def test_a_dask_batch_runs_under_warnings_as_errors(tmp_path):
     assert done.returncode == 0, done.stderr[-3000:]
     assert "1 done, 0 failed" in done.stdout
     assert "Warning" not in done.stderr, done.stderr[-3000:]
+
+
+# -- units ------------------------------------------------------------------------------------
+
+
+def test_an_object_in_metres_read_as_millimetres_is_warned_once():
+    """The README's 6 x 10 x 10 cm box, its metre coordinates read with units="mm"."""
+    box = eg.objects.box(BOX)
+    tiny = eg.Solid(box.vertices, box.faces, units="mm")
+    grasp = box_grasp(PALM_TOP, name="metres as mm")
+    grasp = eg.Grasp(grasp.hand, tiny, grasp.object_pose, name="metres as mm")
+    for backend in ("voxel", "exact"):
+        d, caught = describe(grasp, backend)
+        small = [str(w.message) for w in caught if "times smaller than the hand" in str(w.message)]
+        assert len(small) == 1, backend
+        # 0.1 mm against the open hand's 336.6 mm (its longest side, y): 3,366 times smaller.
+        assert "3,366 times smaller" in small[0] and "0.1 mm across" in small[0]
+        assert "read as millimetres (units='mm')" in small[0]
+        assert d.metadata["size_ratio"] == pytest.approx(1e-4 / 0.33663, rel=1e-3)
+        assert small[0] in d.metadata["warnings"]
+
+
+def test_an_object_in_centimetres_read_as_metres_is_warned_once():
+    """A 4 cm cube whose file is in centimetres, read in metres: 4 m across."""
+    cube = eg.objects.box((0.04, 0.04, 0.04))
+    big = eg.Solid(cube.vertices * 100, cube.faces, units="m")
+    grasp = eg.Grasp(eg.hands.barrett(), big, box_grasp(PALM_TOP + 2).object_pose, name="cm as m")
+    d, caught = describe(grasp)
+    large = [str(w.message) for w in caught if "times larger than the hand" in str(w.message)]
+    assert len(large) == 1
+    assert "11.9 times larger" in large[0] and "4 m across" in large[0]
+    assert "read as metres (units='m', the default)" in large[0]
+    assert d.metadata["size_ratio"] == pytest.approx(4.0 / 0.33663, rel=1e-3)
+    assert large[0] in d.metadata["warnings"]
+
+
+@pytest.mark.parametrize("size", [(0.0035, 0.0035, 0.0035), (1.0, 1.0, 1.0)])
+def test_plausible_sizes_are_not_warned_about(size):
+    """A 3.5 mm cube and a 1 m cube beside the 34 cm hand: within `SIZE_RATIO_RANGE`."""
+    d, caught = describe(box_grasp(PALM_TOP, size=size))
+    assert not [w for w in caught if "than the hand (" in str(w.message)]
+    low, high = diagnostics.SIZE_RATIO_RANGE
+    assert low < d.metadata["size_ratio"] < high

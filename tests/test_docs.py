@@ -13,6 +13,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_mkdocs_strict_build(tmp_path):
     pytest.importorskip("mkdocs", reason="mkdocs is in the 'docs' and 'dev' extras")
+    pytest.importorskip("mkdocstrings", reason="mkdocstrings is in the 'docs' and 'dev' extras")
     result = subprocess.run(
         [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path)],
         cwd=ROOT,
@@ -22,6 +23,12 @@ def test_mkdocs_strict_build(tmp_path):
     assert result.returncode == 0, result.stderr[-3000:]
     assert (tmp_path / "validation" / "index.html").is_file()
     assert (tmp_path / "reports" / "index.html").is_file()
+    # The API reference holds the docstrings themselves: headings, signatures, parameters.
+    api = (tmp_path / "api" / "index.html").read_text()
+    for name in ("exactgrasp.descriptor.compute_descriptor", "exactgrasp.grasp.grasp.Grasp",
+                 "exactgrasp.hands.hand.Hand", "exactgrasp.batch.run.run_batch"):  # fmt: skip
+        assert f'id="{name}"' in api, name
+    assert "Anything <code>exactgrasp.paths.as_sampler</code> takes" in api
 
 
 def test_docs_index_links_every_page():

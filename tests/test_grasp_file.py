@@ -331,6 +331,16 @@ def test_non_rigid_pose_in_a_file_names_the_key_and_object_units(grasp_file):
             lambda d: d["hand"].pop("type"),
             r"missing required key 'hand\.type' \(one of \"builtin\", \"file\", \"meshes\"\)",
         ),
+        (
+            lambda d: d.update(object_pose_in_hnad=d.pop("object_pose_in_hand")),
+            r"missing required key 'object_pose_in_hand'; the file has 'object_pose_in_hnad': "
+            r"did you mean 'object_pose_in_hand'\? \(Rigid 4x4",
+        ),
+        (
+            lambda d: d["hand"].update(tpye=d["hand"].pop("type")),
+            r"missing required key 'hand\.type'; the file has 'hand\.tpye': did you mean "
+            r"'hand\.type'\? \(one of",
+        ),
         (lambda d: d.pop("hand"), r"the grasp file needs 'hand_model' or 'hand'"),
         (
             lambda d: d.update(hand_model="h.urdf"),

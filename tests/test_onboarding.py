@@ -31,11 +31,11 @@ def first_python_block() -> str:
 def cli_lines() -> list[list[str]]:
     """The ``exactgrasp`` lines of the README's command-line block, comments dropped."""
     section = README.split("## Command line", 1)[1]
-    block = re.search(r"^```\n(.*?)^```", section, re.S | re.M).group(1)
+    block = re.search(r"^```bash\n(.*?)^```", section, re.S | re.M).group(1)
     lines = []
     for line in block.splitlines():
         words = shlex.split(line, comments=True)
-        if words and words[0] == ".venv/bin/exactgrasp":
+        if words and words[0] == "exactgrasp":
             lines.append(words[1:])
     return lines
 
@@ -49,12 +49,25 @@ def test_readme_starts_with_make_demo_and_make_test():
     assert re.search(r"^demo:", makefile, re.M) and re.search(r"^test:", makefile, re.M)
 
 
+def test_make_demo_compiles_the_kernels_while_setting_up():
+    """The set-up step (the stamp) runs the quick demo, whose first use compiles both
+    backends' kernels (with their notice), before `make demo` times anything."""
+    makefile = (ROOT / "Makefile").read_text()
+    setup = makefile.split("$(STAMP): pyproject.toml\n", 1)[1].split("\n\n", 1)[0]
+    lines = [line.strip() for line in setup.splitlines() if not line.strip().startswith("@#")]
+    assert lines[-2].startswith("$(BIN)/exactgrasp demo --quick"), lines
+    assert lines[-1] == "touch $(STAMP)"
+    assert re.search(r"^demo: \$\(STAMP\)\n\t\$\(BIN\)/exactgrasp demo", makefile, re.M)
+
+
 def test_readme_install_line_works_from_a_checkout():
     assert 'pip install ".[all]"' in README
     assert 'pip install "exactgrasp[all]"' not in README  # not on an index
     extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     assert "all" in extras["optional-dependencies"]
     assert ".venv/bin/exactgrasp" in README and "source .venv/bin/activate" in README
+    # "in any folder" and the command that runs it agree: python of the activated environment.
+    assert "in any folder you like" in README and "run `python first.py` in that folder" in README
 
 
 def test_readme_first_example_needs_nothing_but_the_package():

@@ -60,6 +60,21 @@ def test_points_only_file(tmp_path):
         Solid.from_file(path)
 
 
+@pytest.mark.parametrize(
+    ("name", "content", "size"),
+    [("empty.stl", b"", 0), ("empty.ply", b"", 0), ("none.stl", bytes(84), 84)],
+)
+def test_empty_mesh_file_is_called_empty_not_a_point_cloud(tmp_path, name, content, size):
+    """A file of no bytes, or a binary STL header with 0 triangles: no word of surface samples."""
+    path = tmp_path / name
+    path.write_bytes(content)
+    with pytest.raises(MeshError) as caught:
+        Solid.from_file(path)
+    message = str(caught.value)
+    assert message.startswith(f"{path}: holds no triangles and no points ({size} bytes)")
+    assert "Export the mesh again" in message and "surface_samples" not in message
+
+
 def test_open_mesh_refused_with_repair_hint():
     v, f = box_arrays([0, 0, 0], [1, 1, 1])
     with pytest.raises(MeshError, match=r"open box: not a closed surface .*repair=True"):

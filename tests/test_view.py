@@ -77,7 +77,8 @@ def test_every_link_the_object_axes_and_paths_are_traces(shown, grasp):
         assert name in names
         assert f'"name":"{name}"' in text, f"{name!r} is not in the written page"
     meshes = [t for t in figure_of(shown.scene).data if t.type == "mesh3d"]
-    assert len(meshes) == len(grasp.hand.link_names) + 1
+    ghosts = [t for t in meshes if t.name.startswith("object at t=")]
+    assert len(meshes) - len(ghosts) == len(grasp.hand.link_names) + 1
     assert sum(name.startswith("path ") for name in names) == 24
 
 
@@ -231,3 +232,96 @@ def test_the_blank_check_fails_on_a_page_without_webgl(tmp_path):
     subprocess.run(command, capture_output=True, timeout=90)
     orange, grey_blue = drawn(colours(png)[2])
     assert orange < 0.005 and grey_blue < 0.01
+
+
+# -- descriptors as pictures ---------------------------------------------------------------------
+
+
+def test_paths_are_ordered_by_kind_then_direction():
+    from exactgrasp.view.descriptors import KIND_ORDER, path_order
+
+    sampler = eg.PathSampler.preset("balanced")
+    order = path_order(sampler)
+    assert sorted(order) == list(range(sampler.n_paths))
+    table = sampler.paths
+    kinds = table.kind[order]
+    ranks = [KIND_ORDER.index(k) for k in kinds]
+    assert ranks == sorted(ranks)  # translations, rotations, both: each kind one block
+    moves = table.direction[order][kinds == "translation"]
+    elevation = np.arcsin(np.clip(moves[:, 2], -1, 1))
+    assert np.all(np.diff(elevation) >= -1e-9)  # up the sphere of directions
+
+
+def test_the_descriptor_figure_is_one_colour_scale_with_its_unit(tmp_path):
+    """Two grasps by two 'backends' (the same values, one scaled): panels of paths x steps in
+    path order, every image on the colour scale 0 .. the largest value of all."""
+    import matplotlib.pyplot as plt
+
+    from exactgrasp.view.descriptors import VALUE_LABEL, path_order, plot_descriptors
+
+    sampler = eg.PathSampler(3, 2, 2, n_steps=4)
+    values = np.arange(sampler.n_paths * 4, dtype=float).reshape(sampler.n_paths, 4) / 100
+    made = {
+        (grasp, backend): eg.Descriptor(values * scale, {"sampler": sampler.params})
+        for grasp, scale0 in (("a", 1.0), ("b", 0.5))
+        for backend, scale in (("voxel", scale0), ("exact", 2 * scale0))
+    }
+    fig = plot_descriptors(made)
+    panels = [ax for ax in fig.axes if ax.images]
+    assert [ax.get_title() for ax in panels] == ["a: voxel", "a: exact", "b: voxel", "b: exact"]
+    top = float(values.max() * 2)
+    assert all(ax.images[0].get_clim() == (0.0, top) for ax in panels)
+    np.testing.assert_array_equal(panels[0].images[0].get_array(), values[path_order(sampler)])
+    colour_bars = [ax for ax in fig.axes if ax.get_ylabel() == VALUE_LABEL]
+    assert len(colour_bars) == 1
+    path = tmp_path / "d.png"
+    fig.savefig(path)
+    plt.close(fig)
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_legend_has_one_entry_per_group_and_the_axes_give_millimetres(shown, grasp):
+    fig = figure_of(shown.scene)
+    entries = [t.name for t in fig.data if t.showlegend]
+    kinds = {k: sum(p.kind == k for p in shown.scene.paths) for k in ("translation", "both")}
+    n_links = len(grasp.hand.link_names)
+    assert entries[:2] == [f"hand ({n_links} links)", "object"]
+    assert "canonical frame axes" in entries and len(entries) <= 8
+    assert (
+        f"{kinds['both']} paths: both" in entries and f"{kinds['translation']} path" in entries[4]
+    )
+    assert not [t for t in fig.data if t.showlegend and t.name.startswith("path ")]
+    assert fig.layout.legend.groupclick == "togglegroup"
+    # One canonical unit is half the palm frame's depth: 42.5 mm for the Barrett hand.
+    mm = 1000.0 / grasp.frame.scale
+    assert mm == pytest.approx(42.5)
+    assert fig.layout.scene.xaxis.title.text == "x (unit = 42.5 mm)"
+    assert (
+        "canonical frame: 1 unit = 42.5 mm (half the palm frame's depth)" in fig.layout.title.text
+    )
+    # The camera stands back further than plotly's default, so that the titles fit.
+    eye = fig.layout.scene.camera.eye
+    assert np.linalg.norm([eye.x, eye.y, eye.z]) > 2.2
+
+
+def test_ghosts_show_the_object_turning_along_the_path_that_rotates_it_most(grasp):
+    from exactgrasp.geometry.se3 import exp_se3
+    from exactgrasp.view.scene import GHOST_FRACTIONS
+
+    scene = build_scene(grasp, "balanced", n_paths=24)
+    object_mesh = next(m for m in scene.meshes if m.role == "object")
+    assert len(scene.ghosts) == len(GHOST_FRACTIONS)
+    drawn = [p.index for p in scene.paths]
+    sampler = eg.PathSampler.preset("balanced")
+    amounts = np.abs(sampler.paths.amount[drawn])
+    index = drawn[int(np.argmax(amounts))]
+    assert all(g.name.endswith(f" on path {index}") for g in scene.ghosts)
+    last = scene.ghosts[-1]
+    t = float(sampler.times.max())
+    pose = exp_se3(sampler.paths.omega[index] * t, sampler.paths.direction[index] * t)
+    np.testing.assert_allclose(
+        last.vertices, object_mesh.vertices @ pose[:3, :3].T + pose[:3, 3], atol=1e-12
+    )
+    # It turns: the copy is not the grasp's object shifted.
+    shift = last.vertices.mean(axis=0) - object_mesh.vertices.mean(axis=0)
+    assert np.abs(last.vertices - (object_mesh.vertices + shift)).max() > 0.05

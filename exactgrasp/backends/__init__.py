@@ -9,16 +9,40 @@ point group ``exactgrasp.backends``; `register_backend` adds one at run time (se
 ``docs/backends.md``). Re-exports the registry and the backend interface.
 """
 
-from exactgrasp.backends import registry
-from exactgrasp.backends.base import Backend, check_poses
-from exactgrasp.backends.registry import (
-    ENTRY_POINT_GROUP,
-    available_backends,
-    backend_class,
-    get_backend,
-    register_backend,
-    shared_backend,
-    unregister_backend,
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from exactgrasp.lazy import lazy_names
+
+if TYPE_CHECKING:
+    from exactgrasp.backends import registry
+    from exactgrasp.backends.base import Backend, check_poses
+    from exactgrasp.backends.registry import (
+        ENTRY_POINT_GROUP,
+        available_backends,
+        backend_class,
+        get_backend,
+        register_backend,
+        shared_backend,
+        unregister_backend,
+    )
+
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    {
+        "exactgrasp.backends.base": ("Backend", "check_poses"),
+        "exactgrasp.backends.registry": (
+            "ENTRY_POINT_GROUP",
+            "available_backends",
+            "backend_class",
+            "get_backend",
+            "register_backend",
+            "shared_backend",
+            "unregister_backend",
+        ),
+    },
+    {"registry": "exactgrasp.backends.registry"},
 )
 
 __all__ = [

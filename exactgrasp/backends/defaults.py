@@ -15,6 +15,9 @@ COMPARED_BACKENDS = ("voxel", "exact")
 VOXEL_HAND_RESOLUTION = 100
 #: Voxels along the longest side of the object's bounding box (the paper's value).
 VOXEL_OBJECT_RESOLUTION = 50
+#: How many cubic voxels a grid's shorter side gets: "floor" (the authors' code, the default)
+#: or "round".
+VOXEL_GRID_RULES = ("floor", "round")
 #: Hand grids and object point sets a `VoxelBackend` keeps, each (least recently used first out).
 VOXEL_CACHE_SIZE = 8
 

@@ -4,11 +4,29 @@
 what runs on the workers; the ``exactgrasp batch`` command is `exactgrasp.cli.batch`.
 """
 
-from exactgrasp.batch.manifest import read_manifest
-from exactgrasp.batch.run import DEFAULT_PART_SIZE, BatchSummary, run_batch
-from exactgrasp.batch.store import read_batch
-from exactgrasp.batch.worker import compute_rows
-from exactgrasp.errors import BatchError
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from exactgrasp.lazy import lazy_names
+
+if TYPE_CHECKING:
+    from exactgrasp.batch.manifest import read_manifest
+    from exactgrasp.batch.run import DEFAULT_PART_SIZE, BatchSummary, run_batch
+    from exactgrasp.batch.store import read_batch
+    from exactgrasp.batch.worker import compute_rows
+    from exactgrasp.errors import BatchError
+
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    {
+        "exactgrasp.batch.manifest": ("read_manifest",),
+        "exactgrasp.batch.run": ("DEFAULT_PART_SIZE", "BatchSummary", "run_batch"),
+        "exactgrasp.batch.store": ("read_batch",),
+        "exactgrasp.batch.worker": ("compute_rows",),
+        "exactgrasp.errors": ("BatchError",),
+    },
+)
 
 __all__ = [
     "DEFAULT_PART_SIZE",

@@ -21,7 +21,10 @@ import numpy as np
 
 from exactgrasp.errors import BatchError, require
 
-__all__ = ["Manifest", "ManifestRow", "read_manifest"]
+__all__ = ["DEFAULT_PART_SIZE", "Manifest", "ManifestRow", "read_manifest"]
+
+#: Rows of the manifest per part, the unit a run writes and resumes (`run_batch`'s default).
+DEFAULT_PART_SIZE = 32
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import sys
 import time
 from collections import deque
 from dataclasses import dataclass
@@ -22,7 +23,7 @@ import numpy as np
 
 from exactgrasp.backends import Backend, get_backend
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
-from exactgrasp.batch.manifest import Manifest, ManifestRow, read_manifest
+from exactgrasp.batch.manifest import DEFAULT_PART_SIZE, Manifest, ManifestRow, read_manifest
 from exactgrasp.batch.store import (
     DESCRIPTORS_FILE,
     ERRORS_FILE,
@@ -46,8 +47,6 @@ from exactgrasp.progress import progress_bar
 from exactgrasp.version import __version__
 
 __all__ = ["DEFAULT_PART_SIZE", "BatchSummary", "run_batch"]
-
-DEFAULT_PART_SIZE = 32
 
 log = logging.getLogger(__name__)
 
@@ -135,6 +134,23 @@ def _run_params(manifest: Manifest, engine: Backend, sampler: PathSampler, **ext
 
 
 @ignores_third_party_warnings
+def _refuse_unguarded_script() -> None:
+    """Refuse a call made while a spawned worker re-runs the calling script: its top level
+    lacks the ``__main__`` guard, and the call would otherwise start a cluster inside each
+    worker, which fails with a message about a folder in use and a nanny."""
+    frame = sys._getframe(2)
+    while frame is not None:
+        if frame.f_globals.get("__name__") == "__mp_main__":
+            script = frame.f_globals.get("__file__", "the script")
+            raise BatchError(
+                f"run_batch was called while a worker process imported {script}: run_batch "
+                "starts worker processes, which import the script that calls it, so its top "
+                'level must be guarded: put the call under `if __name__ == "__main__":` '
+                "(see docs/batch.md)."
+            )
+        frame = frame.f_back
+
+
 def run_batch(
     manifest: str | os.PathLike,
     out: str | os.PathLike,
@@ -197,6 +213,7 @@ def run_batch(
         A ``sampler`` that `exactgrasp.paths.as_sampler` does not take.
     """
     started = time.perf_counter()
+    _refuse_unguarded_script()
     if scheduler is not None and workers is not None:
         raise BatchError(
             Fix("workers", None, shown=""),

@@ -128,7 +128,12 @@ def compute_rows(
             with thread_limit(1 if single_thread else None):
                 descriptor = compute_descriptor(grasp, sampler, engine, progress=False)
             # Timings differ run to run; the rest of the metadata is a function of the input.
-            metadata = {k: v for k, v in descriptor.metadata.items() if k != "seconds"}
+            # Timings differ run to run; the output does not.
+            metadata = {
+                k: v
+                for k, v in descriptor.metadata.items()
+                if k not in ("seconds", "compile_seconds")
+            }
             result["values"] = descriptor.values.ravel()
             result["metadata"] = json.dumps(metadata, sort_keys=True)
             result.update(error=None, message=None)

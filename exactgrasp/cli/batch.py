@@ -13,13 +13,14 @@ import argparse
 import sys
 from typing import Any
 
-from exactgrasp.batch.run import DEFAULT_PART_SIZE, run_batch
+from exactgrasp.batch.manifest import DEFAULT_PART_SIZE
 from exactgrasp.cli.common import (
     FlagTerms,
     add_backend,
     add_grasp_options,
     add_progress,
     add_sampler,
+    described,
     flag,
     in_flag_terms,
     sampler_from_args,
@@ -59,6 +60,8 @@ def cmd_batch(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, sampler, params: dict):
     """`run_batch` with the command's arguments."""
+    from exactgrasp.batch.run import run_batch
+
     return run_batch(
         args.manifest,
         args.out,
@@ -81,11 +84,15 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "batch",
         help="descriptors of every grasp in a manifest, resumable, on local cores or a cluster",
-        description=(
-            "Compute the descriptor of every grasp listed in MANIFEST (.jsonl or .parquet; rows "
-            '{"id": ..., "grasp": "path/to/grasp.json" or an inline grasp}) into --out. Run the '
-            "same command again after a kill to finish what is left. Exit status 1 when any "
-            "row failed (see OUT/errors.jsonl), 2 on a bad manifest or arguments."
+        description=described(
+            (
+                "Compute the descriptor of every grasp listed in MANIFEST (.jsonl or .parquet; "
+                'rows {"id": ..., "grasp": "path/to/grasp.json" or an inline grasp}) into '
+                "--out. Run the same command again after a kill to finish what is left. Exit "
+                "status 1 when any row failed (see OUT/errors.jsonl), 2 on a bad manifest or "
+                "arguments."
+            ),
+            "exactgrasp batch manifest.jsonl --out run --workers 2",
         ),
     )
     parser.add_argument("manifest", metavar="MANIFEST", help="manifest file (.jsonl or .parquet)")

@@ -15,13 +15,13 @@ from typing import Any
 from exactgrasp.cli.common import (
     FlagTerms,
     add_grasp_options,
+    described,
     flag,
     grasp_from_args,
     in_flag_terms,
 )
 from exactgrasp.errors import ClosingError, JointError
 from exactgrasp.geometry.bvh import ENGINES
-from exactgrasp.grasp import Grasp
 from exactgrasp.grasp.closing import ClosingResult, close_fingers
 
 __all__ = ["add_parser", "cmd_close", "summary_lines"]
@@ -118,6 +118,8 @@ def cmd_close(args: argparse.Namespace) -> int:
             )
     except (ClosingError, JointError) as exc:
         raise in_flag_terms(exc, CLOSING_TERMS, f"grasp {grasp.name!r}: ") from exc
+    from exactgrasp.grasp import Grasp
+
     closed = Grasp(result.hand, grasp.object, result.object_pose, name=grasp.name)
     out = closed.save(args.output)
     touching = sum(bool(f.contact_links) for f in result.fingers)
@@ -140,10 +142,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "close",
         help="close the fingers of a grasp onto its object; write the closed grasp file",
-        description="Open the closing joints of GRASP's hand, move the object out along the "
-        "palm normal if the open hand still penetrates it, then close each finger until it "
-        "touches the object (within --tolerance) or reaches its joint limits. Writes the "
-        "closed grasp to --output and prints each closing joint's value and contact.",
+        description=described(
+            "Open the closing joints of GRASP's hand, move the object out along the "
+            "palm normal if the open hand still penetrates it, then close each finger until it "
+            "touches the object (within --tolerance) or reaches its joint limits. Writes the "
+            "closed grasp to --output and prints each closing joint's value and contact.",
+            "exactgrasp close box.json -o box-closed.json",
+        ),
     )
     parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file (an articulated hand)")
     parser.add_argument("-o", "--output", required=True, help="closed grasp JSON file to write")

@@ -15,14 +15,16 @@ import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.errors import ExactGraspError, Fix, SamplerError
 from exactgrasp.geometry.intake import UNITS
-from exactgrasp.grasp import Grasp
-from exactgrasp.grasp.files import file_terms
 from exactgrasp.paths.presets import DEFAULT_PRESET, SAMPLER_PARAMETERS, as_sampler
 from exactgrasp.paths.sampler import PRESETS, PathSampler
+
+if TYPE_CHECKING:
+    from exactgrasp.grasp import Grasp
 
 __all__ = [
     "FILE_KEY_FLAGS",
@@ -36,11 +38,13 @@ __all__ = [
     "add_progress",
     "add_sampler",
     "add_steps",
+    "described",
     "flag",
     "grasp_from_args",
     "in_flag_terms",
     "read_grasp",
     "sampler_from_args",
+    "timing",
 ]
 
 ON_LIMIT = ("error", "clip")
@@ -101,6 +105,8 @@ class FlagTerms:
         return fix.in_python() if spelled is None else spelled
 
     def _file_key(self, fix: Fix) -> str | None:
+        from exactgrasp.grasp.files import file_terms
+
         parameter = FILE_KEY_FLAGS.get(fix.file_key)
         if parameter not in self.flags or fix.form not in ("pass", "Pass", "is", "where"):
             return file_terms(fix)
@@ -120,6 +126,24 @@ def in_flag_terms(exc: ExactGraspError, terms: FlagTerms, *prefix: str) -> Exact
     """``exc`` with its fixes spelled as ``terms``' flags (and ``prefix`` before it); raise it
     ``from exc``."""
     return exc.respelled(terms, *prefix)
+
+
+def described(text: str, example: str) -> str:
+    """A command's ``--help`` description: ``text``, one example and where the rest is."""
+    return (
+        f"{text} Example: {example} . Every flag, with examples: docs/cli.md; from your own "
+        "hand and objects to a dataset's descriptors: docs/tutorial.md."
+    )
+
+
+def timing(metadata: dict) -> str:
+    """``in 2.31 s``, with the seconds spent compiling the kernels said apart (a descriptor's
+    ``seconds`` include them; they are spent once, on first use)."""
+    compiled = float(metadata.get("compile_seconds", 0.0))
+    text = f"in {metadata['seconds'] - compiled:.2f} s"
+    if compiled >= 0.05:
+        text += f" (and {compiled:.1f} s compiling the kernels, first use only)"
+    return text
 
 
 # -- --backend -------------------------------------------------------------------------------
@@ -279,6 +303,8 @@ def read_grasp(
         As `Grasp.from_file`, with the fixes it names (grasp-file keys, Python arguments)
         spelled as the flags that make them.
     """
+    from exactgrasp.grasp import Grasp
+
     given = (("units", units), ("repair", repair), ("on_limit", on_limit))
     overrides = {key: value for key, value in given if value is not None}
     try:

@@ -8,6 +8,7 @@ The command-line face of `exactgrasp.descriptor.pairwise_distances` and
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 from typing import Any
 
@@ -16,21 +17,32 @@ from exactgrasp.cli.common import (
     add_grasp_options,
     add_progress,
     add_sampler,
+    described,
     grasp_from_args,
     sampler_from_args,
 )
 from exactgrasp.cli.params import add_param, build_backend, split_params
-from exactgrasp.compare import compare_backends, write_table
-from exactgrasp.descriptor import Descriptor, pairwise_distances
 from exactgrasp.errors import ExactGraspError
 
 __all__ = ["add_parser", "cmd_compare"]
 
 
 def _distances(inputs: list[Path]) -> int:
+    from exactgrasp.descriptor import Descriptor, pairwise_distances
+
     descriptors = [Descriptor.load(p) for p in inputs]
     if len(descriptors) < 2:
         raise ExactGraspError("compare needs at least two .npz descriptors.")
+    first = descriptors[0]
+    for path, other in zip(inputs[1:], descriptors[1:], strict=True):
+        if other.shape != first.shape or other.sampler.params != first.sampler.params:
+            raise ExactGraspError(
+                f"{inputs[0]} and {path} come from different samplers, so their paths do not "
+                f"correspond: {inputs[0]}: {_sampler_text(first)}; {path}: "
+                f"{_sampler_text(other)}. Compute both with the same --sampler and --steps "
+                f"(exactgrasp descriptor GRASP --sampler '{_sampler_json(first)}' -o OUT.npz "
+                f"gives {inputs[0].name}'s)."
+            )
     for kind in ("l2", "l2_diff"):
         matrix = pairwise_distances(descriptors, kind=kind)
         print(f"{kind} distances:")
@@ -38,6 +50,14 @@ def _distances(inputs: list[Path]) -> int:
             row = "  ".join(f"{matrix[i, j]:10.6f}" for j in range(len(inputs)))
             print(f"  {path.name:30s} {row}")
     return 0
+
+
+def _sampler_json(d) -> str:
+    return json.dumps(d.sampler.params, separators=(", ", ": "))
+
+
+def _sampler_text(d) -> str:
+    return f"{d.shape[0]} paths x {d.shape[1]} steps, sampler {_sampler_json(d)}"
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
@@ -61,6 +81,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         params = split_params(args.param, names, flag="--backends")
         backends = [build_backend(name, params[name]) for name in names]
         grasp = grasp_from_args(args, inputs[0])
+        from exactgrasp.compare import compare_backends, write_table
+
         result = compare_backends(grasp, sampler, backends=backends, progress=args.progress)
         print(result.summary_text())
         if args.output:
@@ -77,9 +99,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "compare",
         help="distances between descriptor files, or backends pose by pose on a grasp file",
-        description="With two or more .npz descriptor files: their l2 and l2_diff distance "
-        "matrices. With one grasp JSON file: every backend of --backends on the same poses, "
-        "compared pose by pose with the last one (the reference).",
+        description=described(
+            "With two or more .npz descriptor files: their l2 and l2_diff distance "
+            "matrices. With one grasp JSON file: every backend of --backends on the same poses, "
+            "compared pose by pose with the last one (the reference).",
+            "exactgrasp compare box.json --backends voxel,exact -o poses.csv",
+        ),
     )
     parser.add_argument("inputs", nargs="+", metavar="INPUT", help="a.npz b.npz ... or GRASP.json")
     parser.add_argument(

@@ -5,29 +5,27 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from exactgrasp.backends import get_backend
-from exactgrasp.cli.common import add_progress, add_sampler, sampler_from_args
+from exactgrasp.cli.common import add_progress, add_sampler, described, sampler_from_args
 from exactgrasp.cli.params import add_param, backend_names, build_backend, split_params
-from exactgrasp.descriptor import Descriptor, compute_descriptor
-from exactgrasp.geometry import objects
-from exactgrasp.grasp import Grasp
-from exactgrasp.grasp.closing import close_grasp
-from exactgrasp.hands.barrett import barrett
-from exactgrasp.hands.gripper import parallel_gripper
 from exactgrasp.paths.presets import as_sampler
+
+if TYPE_CHECKING:
+    from exactgrasp.descriptor import Descriptor
+    from exactgrasp.grasp import Grasp
 
 __all__ = ["QUICK_SAMPLER", "add_parser", "cmd_demo", "demo_grasps", "run_demo"]
 
-#: The sampler of ``--quick``: 24 paths x 5 steps.
+#: The sampler of ``--quick``: 34 paths (6 translations, 4 rotations, 24 both) x 5 steps.
 QUICK_SAMPLER = {"n_translations": 6, "n_axes": 2, "n_amounts": 2, "n_steps": 5}
 
 
 def _pose(rotation_deg: tuple[float, float, float], translation: tuple[float, float, float]):
+    from scipy.spatial.transform import Rotation
+
     pose = np.eye(4)
     pose[:3, :3] = Rotation.from_euler("xyz", rotation_deg, degrees=True).as_matrix()
     pose[:3, 3] = translation
@@ -46,6 +44,12 @@ def demo_grasps() -> list[Grasp]:
     -------
     list of Grasp
     """
+    from exactgrasp.geometry import objects
+    from exactgrasp.grasp import Grasp
+    from exactgrasp.grasp.closing import close_grasp
+    from exactgrasp.hands.barrett import barrett
+    from exactgrasp.hands.gripper import parallel_gripper
+
     knuckle_top = 0.0914
     specs = [
         # a can lying across the palm, its axis along x (across the fingers)
@@ -68,38 +72,9 @@ def demo_grasps() -> list[Grasp]:
 
 
 def _plot(descriptors: dict[tuple[str, str], Descriptor], path: Path) -> None:
-    import matplotlib
+    from exactgrasp.view.descriptors import write_descriptor_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    grasp_names = list(dict.fromkeys(g for g, _ in descriptors))
-    backend_names = list(dict.fromkeys(b for _, b in descriptors))
-    fig, axes = plt.subplots(1, len(grasp_names), figsize=(5 * len(grasp_names), 4), squeeze=False)
-    styles = ["-", "--", ":", "-."]
-    for ax, grasp_name in zip(axes[0], grasp_names, strict=True):
-        for b, backend in enumerate(backend_names):
-            d = descriptors.get((grasp_name, backend))
-            if d is None:
-                continue
-            sampler = d.sampler
-            table = sampler.paths
-            chosen = np.flatnonzero(table.kind == "translation")
-            for k, p in enumerate(chosen):
-                ax.plot(
-                    sampler.times,
-                    d.values[p],
-                    styles[b % len(styles)],
-                    color=f"C{k % 10}",
-                    label=backend if k == 0 else None,
-                )
-        ax.set_title(f"{grasp_name}: translation-only paths (colour = path)")
-        ax.set_xlabel("path time t")
-        ax.set_ylabel("intersection / hand volume")
-        ax.legend(title="backend (line style)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    write_descriptor_figure(descriptors, path)
 
 
 def run_demo(
@@ -122,7 +97,7 @@ def run_demo(
     sampler : PathSampler or str or dict, optional
         Anything `exactgrasp.paths.as_sampler` takes (default: the ``"balanced"`` preset).
     quick : bool
-        The small `QUICK_SAMPLER` (24 paths x 5 steps) instead of ``sampler``.
+        The small `QUICK_SAMPLER` (34 paths x 5 steps) instead of ``sampler``.
     progress : bool, optional
         Progress bars; default only on a terminal.
     n_steps : int, optional
@@ -135,6 +110,9 @@ def run_demo(
     int
         Exit status (0).
     """
+    from exactgrasp.backends import get_backend
+    from exactgrasp.descriptor import compute_descriptor
+
     out.mkdir(parents=True, exist_ok=True)
     sampler = as_sampler(QUICK_SAMPLER if quick else sampler, n_steps=n_steps)
     backends = backend_names()
@@ -145,7 +123,7 @@ def run_demo(
     grasps = demo_grasps()
     descriptors: dict[tuple[str, str], Descriptor] = {}
     rows = []
-    print(f"{'grasp':>12} {'backend':>8} {'seconds':>8} {'mean':>9} {'max':>9}")
+    print(f"{'grasp':>12} {'backend':>8} {'seconds':>8} {'compile':>8} {'mean':>9} {'max':>9}")
     for grasp in grasps:
         for backend in backends:
             d = compute_descriptor(grasp, sampler, backend=engines[backend], progress=progress)
@@ -154,15 +132,21 @@ def run_demo(
             row = {
                 "grasp": grasp.name,
                 "backend": backend,
-                "seconds": d.metadata["seconds"],
+                "seconds": d.metadata["seconds"] - d.metadata["compile_seconds"],
+                "compile_seconds": d.metadata["compile_seconds"],
                 "mean": float(d.values.mean()),
                 "max": float(d.values.max()),
             }
             rows.append(row)
             print(
-                f"{grasp.name:>12} {backend:>8} {row['seconds']:8.2f} {row['mean']:9.5f} "
-                f"{row['max']:9.5f}"
+                f"{grasp.name:>12} {backend:>8} {row['seconds']:8.2f} "
+                f"{row['compile_seconds']:8.2f} {row['mean']:9.5f} {row['max']:9.5f}"
             )
+    if any(row["compile_seconds"] >= 0.05 for row in rows):
+        print(
+            "seconds: computing; compile: compiling the kernels on their first use in this "
+            "process (once per machine: later runs load them from numba's cache)"
+        )
     _plot(descriptors, out / "descriptors.png")
     (out / "summary.json").write_text(json.dumps(rows, indent=1))
     print(f"wrote {out / 'descriptors.png'}, {out / 'summary.json'} and the .npz descriptors")
@@ -186,16 +170,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "demo",
         help="built-in grasps on every available backend",
-        description="Close the built-in Barrett hand onto three built-in objects and the "
-        "built-in parallel gripper onto a box, compute each "
-        "grasp's descriptor with every available backend, print a table of times and values "
-        "and write a plot, a summary and the descriptors into --out.",
+        description=described(
+            "Close the built-in Barrett hand onto three built-in objects and the "
+            "built-in parallel gripper onto a box, compute each "
+            "grasp's descriptor with every available backend, print a table of times and values "
+            "and write a plot, a summary and the descriptors into --out.",
+            "exactgrasp demo --quick --out demo-output",
+        ),
     )
+    quick = as_sampler(QUICK_SAMPLER)
     parser.add_argument("--out", default="demo-output", help="folder for the plot and table")
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="a small sampler (24 paths x 5 steps) instead of --sampler, for a fast look",
+        help=f"a small sampler ({quick.n_paths} paths x {quick.n_steps} steps) instead of "
+        "--sampler, for a fast look",
     )
     add_param(parser)
     add_sampler(parser)

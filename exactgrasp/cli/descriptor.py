@@ -13,17 +13,20 @@ from exactgrasp.cli.common import (
     add_grasp_options,
     add_progress,
     add_sampler,
+    described,
     grasp_from_args,
     sampler_from_args,
+    timing,
 )
 from exactgrasp.cli.params import add_param, build_backend, split_params
-from exactgrasp.descriptor import compute_descriptor
 
 __all__ = ["add_parser", "cmd_descriptor"]
 
 
 def cmd_descriptor(args: argparse.Namespace) -> int:
     """Handler of ``exactgrasp descriptor``; prints a one-line summary, returns 0."""
+    from exactgrasp.descriptor import compute_descriptor
+
     sampler = sampler_from_args(args)
     backend = build_backend(args.backend, split_params(args.param, [args.backend])[args.backend])
     grasp = grasp_from_args(args)
@@ -32,7 +35,7 @@ def cmd_descriptor(args: argparse.Namespace) -> int:
     values = descriptor.values
     print(
         f"{grasp.name}: {values.shape[0]} paths x {values.shape[1]} steps with "
-        f"{args.backend!r} in {descriptor.metadata['seconds']:.2f} s; "
+        f"{args.backend!r} {timing(descriptor.metadata)}; "
         f"mean {values.mean():.5f}, max {values.max():.5f} -> {out}"
     )
     return 0
@@ -43,8 +46,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "descriptor",
         help="the descriptor of one grasp file",
-        description="Compute the descriptor of GRASP (a grasp JSON file) with one backend and "
-        "write it as a .npz file (values: paths x steps, intersection volume / hand volume).",
+        description=described(
+            "Compute the descriptor of GRASP (a grasp JSON file) with one backend and "
+            "write it as a .npz file (values: paths x steps, intersection volume / hand volume).",
+            "exactgrasp descriptor box.json --backend exact -o box.npz",
+        ),
     )
     parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file")
     parser.add_argument("-o", "--output", required=True, help="output .npz file")

@@ -15,13 +15,9 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-from exactgrasp.cli.common import FlagTerms, flag, in_flag_terms
+from exactgrasp.cli.common import FlagTerms, described, flag, in_flag_terms
 from exactgrasp.errors import ExactGraspError, Fix, ModelError
-from exactgrasp.grasp.closing import closing_directions
-from exactgrasp.hands.builtins import BUILTIN_MJCF, get_builtin
-from exactgrasp.hands.hand import Hand
-from exactgrasp.hands.loading import compile_source, load_model
-from exactgrasp.hands.scene import body_tree
+from exactgrasp.hands.builtins import BUILTIN_MJCF
 
 __all__ = ["add_parser", "cmd_inspect", "inspect_lines", "package_dirs_from_args"]
 
@@ -75,6 +71,13 @@ def inspect_lines(
     -------
     list of str
     """
+    from exactgrasp.grasp.closing import closing_directions
+    from exactgrasp.hands.builtins import get_builtin
+    from exactgrasp.hands.hand import Hand
+    from exactgrasp.hands.loading import compile_source, load_model
+    from exactgrasp.hands.palm import missing_palm_fix
+    from exactgrasp.hands.scene import body_tree
+
     xml = BUILTIN_MJCF.get(model) if not Path(model).exists() else None
     path = f"{model}.xml" if xml is not None else model
     mj_model = compile_source(path, geometry=geometry, package_dirs=package_dirs, xml=xml)
@@ -106,8 +109,10 @@ def inspect_lines(
     for dep, (driver, ratio, offset) in hand.couplings.items():
         lines.append(f"  {dep} = {offset:g} + {ratio:g} * {driver}")
     if hand.palm is None:
-        lines.append("  palm frame: none (pass palm= or write palm_frame.json beside the model)")
-        return [*lines, "  closing joints: name them (joints=[...]) or give a palm frame"]
+        lines.append(
+            f"  palm frame: none; {missing_palm_fix(hand.source if xml is None else None)}"
+        )
+        return [*lines, "  closing joints: found from the palm frame, once it is written"]
     p = hand.palm
     lines.append(
         f"  palm frame: origin {_xyz(p.origin)}, normal {_xyz(p.normal)}, up {_xyz(p.up)}, "
@@ -145,12 +150,15 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "inspect",
         help="the body tree of a URDF/MJCF hand model: joints, limits, geoms, sites",
-        description=(
-            "Print the bodies of a URDF or MJCF model (or of a built-in hand: "
-            f"{', '.join(sorted(BUILTIN_MJCF))}) with their joints (type, axis, limits), geoms "
-            "(count, kinds, size) and sites, the top-level bodies that could be the hand, and "
-            "the hand load_model makes of it: to choose root_body, the palm frame and the "
-            "closing joints."
+        description=described(
+            (
+                "Print the bodies of a URDF or MJCF model (or of a built-in hand: "
+                f"{', '.join(sorted(BUILTIN_MJCF))}) with their joints (type, axis, limits), "
+                "geoms (count, kinds, size) and sites, the top-level bodies that could be the "
+                "hand, and the hand load_model makes of it: to choose root_body, the palm frame "
+                "and the closing joints."
+            ),
+            "exactgrasp inspect my_hand.urdf --package-dir my_hand_description=./meshes",
         ),
     )
     parser.add_argument("model", metavar="MODEL", help="URDF/MJCF file or built-in hand name")

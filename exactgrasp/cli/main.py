@@ -38,7 +38,10 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``exactgrasp`` command."""
     parser = argparse.ArgumentParser(
         prog="exactgrasp",
-        description="Grasp descriptors from hand-object intersection along rigid paths.",
+        description="Grasp descriptors from hand-object intersection along rigid paths. "
+        "Start with `exactgrasp demo --quick`; `exactgrasp COMMAND --help` shows a command's "
+        "flags and an example; every command: docs/cli.md; from your own hand and objects to "
+        "a dataset's descriptors: docs/tutorial.md.",
     )
     parser.add_argument("--version", action="version", version=f"exactgrasp {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)

@@ -15,10 +15,9 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.backends.base import check_poses
-from exactgrasp.cli.common import GRASP_FLAGS, FlagTerms, flag, in_flag_terms
+from exactgrasp.cli.common import GRASP_FLAGS, FlagTerms, described, flag, in_flag_terms
 from exactgrasp.errors import ExactGraspError
 from exactgrasp.geometry.intake import UNITS
-from exactgrasp.overlap import as_solid, intersection
 
 __all__ = ["add_parser", "cmd_overlap", "read_pose", "read_units"]
 
@@ -103,6 +102,8 @@ def cmd_overlap(args: argparse.Namespace) -> int:
     ExactGraspError
         Naming the flag (``--pose``, ``--units``, ...) or the file (``A``, ``B``) at fault.
     """
+    from exactgrasp.overlap import as_solid, intersection
+
     units_a, units_b = read_units(args.units)
     poses = None if args.pose is None else read_pose(args.pose)
     options = {"repair": args.repair, "check_scale": args.check_scale}
@@ -127,10 +128,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "overlap",
         help="exact intersection volume of two closed meshes (m^3)",
-        description=(
-            "Print the exact volume of A ∩ B in m^3, B moved by --pose, with its certified "
-            "error bound. Both files must hold closed surfaces (--repair lets trimesh and "
-            "pymeshfix close them)."
+        description=described(
+            (
+                "Print the exact volume of A ∩ B in m^3, B moved by --pose, with its certified "
+                "error bound. Both files must hold closed surfaces (--repair lets trimesh and "
+                "pymeshfix close them)."
+            ),
+            "exactgrasp overlap hand.stl object.stl --units mm --pose pose.json",
         ),
     )
     parser.add_argument("a", metavar="A", help="mesh file that stays (STL, OBJ, PLY, OFF, GLB)")

@@ -11,17 +11,19 @@ from typing import Any
 from exactgrasp.cli.common import (
     add_grasp_options,
     add_sampler,
+    described,
     grasp_from_args,
     sampler_from_args,
 )
-from exactgrasp.view.scene import choose_paths
-from exactgrasp.view.write import show
 
 __all__ = ["add_parser", "cmd_show"]
 
 
 def cmd_show(args: argparse.Namespace) -> int:
     """Handler of ``exactgrasp show``; prints what it wrote, returns 0."""
+    from exactgrasp.view.scene import choose_paths
+    from exactgrasp.view.write import show
+
     sampler = sampler_from_args(args)
     # Checked here first so that the message names the flag, not the Python argument.
     choose_paths(sampler, args.paths, name="--paths")
@@ -42,10 +44,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "show",
         help="an interactive HTML page (and a PNG) of a grasp and its sampled paths",
-        description=(
-            "Draw the hand links, the object at the grasp pose, the canonical frame's axes and "
-            "a spread of the sampler's paths (the object's centre, coloured by time) into one "
-            "self-contained HTML page that needs no network to open."
+        description=described(
+            (
+                "Draw the hand links, the object at the grasp pose, the canonical frame's axes "
+                "and a spread of the sampler's paths (the object's centre, coloured by time) "
+                "into one self-contained HTML page that needs no network to open."
+            ),
+            "exactgrasp show box.json -o box.html --png box.png",
         ),
     )
     parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file")

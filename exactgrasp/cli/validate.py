@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from exactgrasp.cli.common import described
 from exactgrasp.report.args import DESCRIPTION, HELP, add_arguments, run_from_args
 
 __all__ = ["add_parser"]
@@ -16,7 +17,10 @@ __all__ = ["add_parser"]
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``validate`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser("validate", help=HELP, description=DESCRIPTION)
+    example = "exactgrasp validate --quick --out report"
+    parser = subparsers.add_parser(
+        "validate", help=HELP, description=described(DESCRIPTION, example)
+    )
     add_arguments(parser)
     parser.set_defaults(func=run_from_args)
     return parser

@@ -1,18 +1,21 @@
 """Reading meshes and points into the library: units, file loading, sample points.
 
-What `exactgrasp.geometry.solid.Solid` uses to take meshes in.
+What `exactgrasp.geometry.solid.Solid` uses to take meshes in. trimesh loads on first read:
+the command line takes `UNITS` from here for its help.
 """
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import trimesh
 
 from exactgrasp.errors import Fix, MeshError
+
+if TYPE_CHECKING:
+    import trimesh
 
 __all__ = [
     "MAX_PLAUSIBLE_SIZE_M",
@@ -59,11 +62,15 @@ def unit_scale(units: str) -> float:
 
 
 def load_trimesh(path: Path) -> trimesh.Trimesh:
+    import trimesh
+
     if not path.exists():
         raise MeshError(
             f"{path}: no such file; check the path (relative paths are resolved "
             f"from {Path.cwd()})."
         )
+    if path.is_file() and path.stat().st_size == 0:
+        _refuse_empty(path)
     try:
         loaded = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:
@@ -78,18 +85,30 @@ def load_trimesh(path: Path) -> trimesh.Trimesh:
     return loaded
 
 
+def _refuse_empty(path: Path) -> None:
+    """Refuse a file that holds nothing (no bytes, or a header and no triangles)."""
+    raise MeshError(
+        f"{path}: holds no triangles and no points ({path.stat().st_size:,} bytes): an empty "
+        "or cut-short file; a solid needs a closed triangle surface. Export the mesh again "
+        "(STL, OBJ, PLY, OFF or GLB) and check that the file is complete."
+    )
+
+
 def _refuse_points_only(path: Path) -> None:
     """Refuse a file with no faces, naming its points when it holds a point cloud (trimesh's
     ``force="mesh"`` reads one as an empty mesh)."""
+    import trimesh
+
     try:
         points = len(getattr(trimesh.load(path, process=False), "vertices", ()))
     except Exception:  # the message then says what is known: no faces
         points = 0
-    held = f"a point cloud of {points:,} points and no faces" if points else "no faces"
+    if not points:
+        _refuse_empty(path)
     raise MeshError(
-        f"{path}: holds {held}; a solid needs a closed triangle surface. Give the object's "
-        "mesh file instead; surface samples like these go with it as `surface_samples` "
-        '(the grasp file\'s "object_surface_samples").'
+        f"{path}: holds a point cloud of {points:,} points and no faces; a solid needs a "
+        "closed triangle surface. Give the object's mesh file instead; surface samples like "
+        'these go with it as `surface_samples` (the grasp file\'s "object_surface_samples").'
     )
 
 
@@ -112,6 +131,8 @@ def load_points(source: Any, units: str = "m", name: str = "surface_samples") ->
         path = Path(source)
         if not path.exists():
             raise MeshError(f"{name}: {path}: no such file; check the path.")
+        import trimesh
+
         loaded = trimesh.load(path, process=False)
         points = np.asarray(getattr(loaded, "vertices", loaded), dtype=np.float64)
         name = str(path)

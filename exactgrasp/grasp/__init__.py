@@ -5,6 +5,18 @@ Modules here import `exactgrasp.errors`, `exactgrasp.cache`, `exactgrasp.geometr
 not imported here (it needs coal or python-fcl on use).
 """
 
-from exactgrasp.grasp.grasp import FORMAT, Grasp, check_pose
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from exactgrasp.lazy import lazy_names
+
+if TYPE_CHECKING:
+    from exactgrasp.grasp.grasp import FORMAT, Grasp, check_pose
+
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    {"exactgrasp.grasp.grasp": ("FORMAT", "Grasp", "check_pose")},
+)
 
 __all__ = ["FORMAT", "Grasp", "check_pose"]

@@ -10,7 +10,10 @@ mesh distances (coal or python-fcl BVHs, built once per link and per object), wi
 as the safety net, so no step passes through the object. See ``docs/closing.md``.
 
 This module holds the public API and the choice of closing joints, fingers and directions; the
-geometric engine is `exactgrasp.grasp.contact`.
+geometric engine is `exactgrasp.grasp.contact`. The geometry (bvh, solid, the hand, the grasp
+and the contact engine) loads inside the functions, so that ``exactgrasp close --help`` reads
+the defaults without it. Long because those imports repeat in each public function; the API,
+its checks and the choice of fingers and directions read best as one module.
 """
 
 from __future__ import annotations
@@ -19,20 +22,18 @@ import math
 import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from exactgrasp.errors import ClosingError, Fix, JointError, warn_caller
 from exactgrasp.geometry.bvh import DEFAULT_ENGINE, ENGINES
-from exactgrasp.geometry.solid import Solid
-from exactgrasp.grasp import contact
-from exactgrasp.grasp.contact import BACKOFF_STEP
-from exactgrasp.grasp.grasp import Grasp, check_pose
-from exactgrasp.hands.hand import Hand
 
+if TYPE_CHECKING:
+    from exactgrasp.geometry.solid import Solid
+    from exactgrasp.grasp.grasp import Grasp
+    from exactgrasp.hands.hand import Hand
 __all__ = [
-    "BACKOFF_STEP",
     "SPREAD_AXIS_ANGLE",
     "ClosingError",
     "ClosingResult",
@@ -195,6 +196,9 @@ def close_fingers(
         a dict of closing joints to +1 / -1.
     """
     _check_inputs(hand, object, tolerance, step, engine)
+    from exactgrasp.grasp import contact
+    from exactgrasp.grasp.grasp import check_pose
+
     pose = check_pose(np.eye(4) if object_pose is None else object_pose)
     model = hand.model
     chosen = _closing_joints(hand, joints)
@@ -258,6 +262,8 @@ def closing_directions(
     dict of str to int
         ``{joint: +1 | -1}`` finger by finger; +1 closes towards the upper limit.
     """
+    from exactgrasp.grasp.grasp import check_pose
+
     pose = check_pose(np.eye(4) if object_pose is None else object_pose)
     chosen = _closing_joints(hand, joints)
     moves = _links_moved(hand.model, chosen)
@@ -284,6 +290,8 @@ def close_grasp(grasp: Grasp, **options: Any) -> Grasp:
         result = close_fingers(grasp.hand, grasp.object, grasp.object_pose, **options)
     except (ClosingError, JointError) as exc:
         raise exc.prefixed(f"grasp {grasp.name!r}: ") from exc
+    from exactgrasp.grasp.grasp import Grasp
+
     return Grasp(result.hand, grasp.object, result.object_pose, name=grasp.name)
 
 
@@ -291,6 +299,9 @@ def close_grasp(grasp: Grasp, **options: Any) -> Grasp:
 
 
 def _check_inputs(hand, obj, tolerance, step, engine) -> None:
+    from exactgrasp.geometry.solid import Solid
+    from exactgrasp.hands.hand import Hand
+
     if not isinstance(hand, Hand):
         raise ClosingError(f"hand must be an exactgrasp Hand, got {type(hand).__name__}")
     if not isinstance(obj, Solid):
@@ -310,6 +321,8 @@ def _check_inputs(hand, obj, tolerance, step, engine) -> None:
 
 
 def _closing_joints(hand: Hand, joints: Any) -> tuple[str, ...]:
+    from exactgrasp.grasp import contact
+
     model, limits = hand.model, hand.joint_limits
     joints = getattr(model, "closing_joints", None) if joints is None else joints
     if joints is None:
@@ -355,6 +368,8 @@ def _closing_joints(hand: Hand, joints: Any) -> tuple[str, ...]:
 
 def _directions(hand, obj, pose, chosen, fingers, moves, given) -> tuple[dict, set]:
     """``{joint: +1 | -1}`` for the closing joints, and the set of those inferred."""
+    from exactgrasp.grasp import contact
+
     model = hand.model
     given = {} if given is None else given
     if not isinstance(given, Mapping):

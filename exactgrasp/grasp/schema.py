@@ -209,6 +209,7 @@ def _check_object(value: dict, schema: dict, path: str, source: str) -> None:
             meaning = _first_sentence(properties.get(key, {}))
             raise GraspFileError(
                 f"{source}: missing required key {_join(path, key)!r}"
+                + _misspelt(key, value, properties, path)
                 + (f" ({meaning})." if meaning else ".")
             )
     for key, needs in schema.get("dependentRequired", {}).items():
@@ -234,6 +235,16 @@ def _check_object(value: dict, schema: dict, path: str, source: str) -> None:
             raise GraspFileError(_unknown_key(str(key), properties, patterns, path, source))
         if isinstance(extra, dict):
             _check(item, extra, key_path, source)
+
+
+def _misspelt(key: str, value: dict, properties: Any, path: str) -> str:
+    """``; the file has 'kye': did you mean 'key'?`` when an unknown key of ``value`` is
+    close to the missing ``key``; else nothing."""
+    unknown = [str(k) for k in value if k not in properties]
+    close = difflib.get_close_matches(key, unknown, n=1, cutoff=0.6)
+    if not close:
+        return ""
+    return f"; the file has {_join(path, close[0])!r}: did you mean {_join(path, key)!r}?"
 
 
 def _unknown_key(key: str, properties: dict, patterns: dict, path: str, source: str) -> str:
@@ -302,8 +313,10 @@ def _pick(value: dict, branches: list[dict], path: str, source: str) -> dict:
     while len(branches) > 1 and (tag := _discriminator(branches, used)) is not None:
         tags = list(dict.fromkeys(b["properties"][tag]["const"] for b in branches))
         if tag not in value:
+            known = {k for b in branches for k in b.get("properties", {})}
             raise GraspFileError(
-                f"{source}: missing required key {_join(path, tag)!r} (one of "
+                f"{source}: missing required key {_join(path, tag)!r}"
+                f"{_misspelt(tag, value, known, path)} (one of "
                 f"{', '.join(map(json.dumps, tags))})."
             )
         _check(value[tag], {"enum": tags}, _join(path, tag), source)

@@ -7,15 +7,36 @@ Modules here import `exactgrasp.errors`, `exactgrasp.cache`, `exactgrasp.geometr
 other (never grasps, paths or backends).
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+# The built-in hands' modules are light (their MJCF text); and `barrett` must be bound here,
+# or importing the submodule `exactgrasp.hands.barrett` would shadow the function.
 from exactgrasp.hands.barrett import barrett, barrett_model
 from exactgrasp.hands.builtins import BUILTIN_HANDS, available_hands, get_builtin
-from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.gripper import parallel_gripper, parallel_gripper_model
-from exactgrasp.hands.hand import Hand, HandModel, RigidModel
-from exactgrasp.hands.joints import JOINT_LIMIT_TOL
-from exactgrasp.hands.loading import load_model
-from exactgrasp.hands.model import KinematicModel
-from exactgrasp.hands.palm import PalmSpec
+from exactgrasp.lazy import lazy_names
+
+if TYPE_CHECKING:
+    from exactgrasp.hands.frame import HandFrame
+    from exactgrasp.hands.hand import Hand, HandModel, RigidModel
+    from exactgrasp.hands.joints import JOINT_LIMIT_TOL
+    from exactgrasp.hands.loading import load_model
+    from exactgrasp.hands.model import KinematicModel
+    from exactgrasp.hands.palm import PalmSpec
+
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    {
+        "exactgrasp.hands.frame": ("HandFrame",),
+        "exactgrasp.hands.hand": ("Hand", "HandModel", "RigidModel"),
+        "exactgrasp.hands.joints": ("JOINT_LIMIT_TOL",),
+        "exactgrasp.hands.loading": ("load_model",),
+        "exactgrasp.hands.model": ("KinematicModel",),
+        "exactgrasp.hands.palm": ("PalmSpec",),
+    },
+)
 
 __all__ = [
     "BUILTIN_HANDS",
@@ -34,3 +55,7 @@ __all__ = [
     "parallel_gripper",
     "parallel_gripper_model",
 ]
+
+
+#: The old name of `get_builtin`.
+get = get_builtin

@@ -24,10 +24,13 @@ contact; ``distal_coupling=True`` couples them.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from exactgrasp.cache import LRUCache
-from exactgrasp.hands.hand import Hand
-from exactgrasp.hands.loading import load_model
-from exactgrasp.hands.model import KinematicModel
+
+if TYPE_CHECKING:
+    from exactgrasp.hands.hand import Hand
+    from exactgrasp.hands.model import KinematicModel
 
 __all__ = ["BARRETT_MJCF", "BARRETT_PALM", "DISTAL_RATIO", "barrett", "barrett_model"]
 
@@ -78,7 +81,16 @@ BARRETT_MJCF = f"""<mujoco model="barrett_builtin">
 </mujoco>
 """
 
+
 #: Compiled models by (distal_coupling, tessellation).
+def _load_model():
+    # MuJoCo and the mesh code load with the first hand, not with the MJCF text (which
+    # ``exactgrasp inspect --help`` lists by name).
+    from exactgrasp.hands.loading import load_model
+
+    return load_model
+
+
 _MODELS = LRUCache(8)
 
 
@@ -106,7 +118,7 @@ def barrett_model(distal_coupling: bool = False, tessellation: int = 32) -> Kine
     )
     return _MODELS.get(
         (distal_coupling, tessellation),
-        lambda: load_model(
+        lambda: _load_model()(
             "barrett_builtin.xml",
             xml=BARRETT_MJCF,
             palm=BARRETT_PALM,
@@ -146,4 +158,6 @@ def barrett(
         "name": "barrett",
         "options": {"distal_coupling": bool(distal_coupling), "tessellation": int(tessellation)},
     }
+    from exactgrasp.hands.hand import Hand
+
     return Hand(model, joints=joints, source=source, **hand_kwargs)

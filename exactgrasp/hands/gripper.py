@@ -18,10 +18,13 @@ user-facing joint.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from exactgrasp.cache import LRUCache
-from exactgrasp.hands.hand import Hand
-from exactgrasp.hands.loading import load_model
-from exactgrasp.hands.model import KinematicModel
+
+if TYPE_CHECKING:
+    from exactgrasp.hands.hand import Hand
+    from exactgrasp.hands.model import KinematicModel
 
 __all__ = [
     "GRIPPER_MJCF",
@@ -61,7 +64,16 @@ GRIPPER_MJCF = f"""<mujoco model="parallel_gripper">
 </mujoco>
 """
 
+
 #: The compiled model (boxes only, so there is nothing to tessellate).
+def _load_model():
+    # MuJoCo and the mesh code load with the first hand, not with the MJCF text (which
+    # ``exactgrasp inspect --help`` lists by name).
+    from exactgrasp.hands.loading import load_model
+
+    return load_model
+
+
 _MODELS = LRUCache(1)
 
 
@@ -76,7 +88,7 @@ def parallel_gripper_model() -> KinematicModel:
     """
     return _MODELS.get(
         "gripper",
-        lambda: load_model("parallel_gripper.xml", xml=GRIPPER_MJCF, palm=GRIPPER_PALM),
+        lambda: _load_model()("parallel_gripper.xml", xml=GRIPPER_MJCF, palm=GRIPPER_PALM),
     )
 
 
@@ -97,4 +109,6 @@ def parallel_gripper(joints: dict[str, float] | None = None, **hand_kwargs) -> H
         With the gripper's palm frame unless ``frame=`` is given.
     """
     source = {"type": "builtin", "name": "parallel_gripper", "options": {}}
+    from exactgrasp.hands.hand import Hand
+
     return Hand(parallel_gripper_model(), joints=joints, source=source, **hand_kwargs)

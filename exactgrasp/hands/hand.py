@@ -24,6 +24,7 @@ from exactgrasp.geometry.solid import Solid
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.loading import jsonable, load_model_cached
 from exactgrasp.hands.noise import joint_noise
+from exactgrasp.hands.palm import missing_palm_fix
 
 __all__ = ["Hand", "HandModel", "RigidModel"]
 
@@ -106,7 +107,7 @@ class Hand:
         self.joints: dict[str, float] = model.check_joints(dict(joints or {}), on_limit=on_limit)
         if frame is None:
             palm = getattr(model, "palm", None)
-            if palm is None:
+            if palm is None and isinstance(model, RigidModel):
                 raise FrameError(
                     f"{model.name} names no palm frame; ",
                     Fix(
@@ -117,6 +118,9 @@ class Hand:
                     ),
                     ".",
                 )
+            if palm is None:
+                source = getattr(model, "source", None)
+                raise FrameError(f"{model.name} has no palm frame; {missing_palm_fix(source)}.")
             frame = _frame_from_palm(palm)
         if not isinstance(frame, HandFrame):
             raise FrameError(f"frame must be a HandFrame, got {type(frame).__name__}.")

@@ -5,13 +5,14 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from exactgrasp.errors import ModelError
 
-__all__ = ["AXES", "PalmSpec", "palm_axis", "resolve_palm"]
+__all__ = ["AXES", "PalmSpec", "missing_palm_fix", "palm_axis", "resolve_palm"]
 
 #: Axis names of a frame: column index, or ``-(index + 1)`` for the negative axis.
 AXES = {"+x": 0, "x": 0, "+y": 1, "y": 1, "+z": 2, "z": 2, "-x": -1, "-y": -2, "-z": -3}
@@ -60,6 +61,31 @@ class PalmSpec:
         object.__setattr__(self, "normal", tuple(normal.tolist()))
         object.__setattr__(self, "up", tuple(up.tolist()))
         object.__setattr__(self, "depth", float(self.depth))
+
+
+def missing_palm_fix(source: str | None) -> str:
+    """The one fix for a model file without a palm frame, as the error of `Hand` and
+    ``exactgrasp inspect`` both give it.
+
+    Parameters
+    ----------
+    source : str, optional
+        The model file (None: a model compiled from text).
+
+    Returns
+    -------
+    str
+        Where to write ``palm_frame.json`` and what it holds, in the user's terms.
+    """
+    where = "beside the model file" if not source else str(Path(source).parent / "palm_frame.json")
+    return (
+        f"write the palm frame into {where}: "
+        '{"origin": [x, y, z], "normal": [x, y, z], "up": [x, y, z], "depth": d} in the '
+        "model's coordinates (metres): the centre of the palm's face, the direction out of the "
+        "palm, the direction along the palm towards the thumb (or a chosen side), and the "
+        "distance from the palm to the outside of the loosely closed fingers "
+        "(see docs/tutorial.md, 'The palm frame')"
+    )
 
 
 def palm_axis(value: Any, R: np.ndarray, what: str) -> np.ndarray:

@@ -14,7 +14,6 @@ import sys
 from exactgrasp.datapath import ENV_VAR, data_dir
 from exactgrasp.errors import DataError
 from exactgrasp.report.config import ValidationConfig
-from exactgrasp.report.data import barrett_dir
 
 __all__ = ["DESCRIPTION", "HELP", "add_arguments", "overrides", "run_from_args"]
 
@@ -116,6 +115,7 @@ def run_from_args(args: argparse.Namespace, prog: str = "exactgrasp validate") -
         Exit status: 0, or 2 when the data folder is missing or incomplete.
     """
     # Loads the figures (matplotlib) only when a report is actually run.
+    from exactgrasp.report.data import barrett_dir
     from exactgrasp.report.run import run_validation
 
     data = data_dir() if args.data is None else args.data

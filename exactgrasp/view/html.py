@@ -18,6 +18,48 @@ from exactgrasp.view.scene import Scene
 COLORSCALE = "Viridis"
 #: Marker size (px) at the sampler's step times; the curve between them has none.
 STEP_MARKER = 3.5
+#: Opacity of the object's ghosted copies along a path.
+GHOST_OPACITY = 0.18
+#: Where the camera looks from, relative to the scene's box: far enough that the box, its
+#: axis titles included, fits the page (plotly's default, 1.25 each, cuts the x title).
+CAMERA_EYE = {"x": 2.0, "y": -1.9, "z": 1.25}
+#: The legend's words for each kind of path (one entry per kind drawn).
+KIND_LABELS = {"translation": "translations", "rotation": "rotations", "both": "both"}
+
+
+def _legend(go: Any, scene: Scene) -> list:
+    """One empty trace per legend entry: the hand, the object, its ghosts, the frame, and the
+    drawn paths of each kind (with their count)."""
+    from exactgrasp.view.scene import AXES, HAND_COLOR, OBJECT_COLOR
+
+    n_links = sum(m.role == "hand" for m in scene.meshes)
+    entries = [
+        ("hand", f"hand ({n_links} links)", HAND_COLOR),
+        ("object", "object", OBJECT_COLOR),
+    ]
+    if scene.ghosts:
+        path = scene.ghosts[0].name.rpartition(" on ")[2]
+        entries.append(("ghost", f"object along {path} ({len(scene.ghosts)} copies)", "#f4c19c"))
+    entries.append(("frame", "canonical frame axes", AXES[2][2]))
+    for kind, label in KIND_LABELS.items():
+        count = sum(p.kind == kind for p in scene.paths)
+        if count:
+            noun = "path" if count == 1 else "paths"
+            entries.append((f"paths {kind}", f"{count} {noun}: {label}", "#31688e"))
+    return [
+        go.Scatter3d(
+            x=[None],
+            y=[None],
+            z=[None],
+            mode="markers",
+            marker={"color": colour, "size": 9, "symbol": "square"},
+            name=label,
+            legendgroup=group,
+            showlegend=True,
+            hoverinfo="skip",
+        )
+        for group, label, colour in entries
+    ]
 
 
 def plotly_go():
@@ -35,8 +77,11 @@ def figure(scene: Scene) -> Any:
     Returns
     -------
     plotly.graph_objects.Figure
-        One ``Mesh3d`` per hand link and one for the object (named as in
-        `Scene.trace_names`), one ``Scatter3d`` per frame axis and one per path.
+        One ``Mesh3d`` per hand link, one for the object and one per ghost (named as in
+        `Scene.trace_names` and `MeshPart.name`), one ``Scatter3d`` per frame axis and one
+        per path. The legend has one entry per group (the hand, the object, its ghosts, the
+        frame, each kind of path; empty legend-only traces), and a click on it hides the
+        group.
     """
     go = plotly_go()
     traces = []
@@ -55,10 +100,28 @@ def figure(scene: Scene) -> Any:
                 opacity=0.55 if mesh.role == "object" else 1.0,
                 flatshading=True,
                 lighting={"ambient": 0.55, "diffuse": 0.8, "specular": 0.15},
-                showlegend=True,
+                showlegend=False,
                 legendgroup=mesh.role,
-                legendgrouptitle_text="hand links" if mesh.role == "hand" else "object",
                 hovertemplate=f"{mesh.name}<extra></extra>",
+            )
+        )
+    for ghost in scene.ghosts:
+        v, f = ghost.vertices, ghost.faces
+        traces.append(
+            go.Mesh3d(
+                x=v[:, 0],
+                y=v[:, 1],
+                z=v[:, 2],
+                i=f[:, 0],
+                j=f[:, 1],
+                k=f[:, 2],
+                name=ghost.name,
+                color=ghost.color,
+                opacity=GHOST_OPACITY,
+                flatshading=True,
+                showlegend=False,
+                legendgroup="ghost",
+                hovertemplate=f"{ghost.name}<extra></extra>",
             )
         )
     for axis in scene.axes:
@@ -74,8 +137,8 @@ def figure(scene: Scene) -> Any:
                 textfont={"color": axis.color, "size": 16},
                 line={"color": axis.color, "width": 7},
                 name=axis.name,
+                showlegend=False,
                 legendgroup="frame",
-                legendgrouptitle_text="canonical frame",
                 hovertemplate=f"{axis.name}<extra></extra>",
             )
         )
@@ -103,27 +166,30 @@ def figure(scene: Scene) -> Any:
                     },
                 },
                 name=path.name,
-                legendgroup="paths",
-                legendgrouptitle_text="sampled paths (object centre)",
-                customdata=path.times,
-                hovertemplate=f"{path.name}<br>t = %{{customdata:.3f}}<extra></extra>",
+                showlegend=False,
+                legendgroup=f"paths {path.kind}",
+                customdata=np.column_stack([path.times, path.points * scene.mm_per_unit]),
+                hovertemplate=(
+                    f"{path.name}<br>t = %{{customdata[0]:.3f}}<br>centre (mm): "
+                    "%{customdata[1]:.1f}, %{customdata[2]:.1f}, %{customdata[3]:.1f}"
+                    "<extra></extra>"
+                ),
             )
         )
+    traces.extend(_legend(go, scene))
     fig = go.Figure(traces)
-    titles = {
-        "x": "x (canonical)",
-        "y": "y (canonical, up)",
-        "z": "z (canonical, out of the palm)",
-    }
+    mm = f"unit = {scene.mm_per_unit:.3g} mm"
+    titles = {"x": f"x ({mm})", "y": f"y, up ({mm})", "z": f"z, out of the palm ({mm})"}
+    units = f"canonical frame: 1 unit = {scene.mm_per_unit:.3g} mm (half the palm frame's depth)"
     fig.update_layout(
-        title={"text": scene.title, "font": {"size": 14}},
+        title={"text": f"{scene.title}<br><sup>{units}</sup>", "font": {"size": 14}},
         scene={
             "aspectmode": "data",
             **{f"{a}axis": {"title": {"text": t}} for a, t in titles.items()},
-            "camera": {"eye": {"x": 1.6, "y": -1.5, "z": 1.0}},
-            "domain": {"x": [0.0, 1.0], "y": [0.12, 1.0]},
+            "camera": {"eye": CAMERA_EYE},
+            "domain": {"x": [0.0, 1.0], "y": [0.16, 0.97]},
         },
-        legend={"groupclick": "toggleitem", "itemsizing": "constant"},
+        legend={"groupclick": "togglegroup", "itemsizing": "constant"},
         margin={"l": 0, "r": 0, "t": 50, "b": 0},
         paper_bgcolor="white",
     )

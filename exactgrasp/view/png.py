@@ -68,6 +68,12 @@ def write_png(
                 lightsource=light,
             )
         )
+    for ghost in scene.ghosts:
+        ax.add_collection3d(
+            Poly3DCollection(
+                ghost.vertices[ghost.faces], facecolors=ghost.color, linewidths=0.0, alpha=0.12
+            )
+        )
     cmap, norm = COLORMAP, Normalize(0.0, scene.t_max)
     for part in scene.paths:
         segments = np.stack([part.points[:-1], part.points[1:]], axis=1)
@@ -93,7 +99,9 @@ def write_png(
     ax.set_xlabel("x")
     ax.set_ylabel("y (up)")
     ax.set_zlabel("z (out of the palm)")
-    ax.set_title(scene.title, fontsize=10)
+    mm = f"canonical units: 1 unit = {scene.mm_per_unit:.3g} mm"
+    ghosts = f"; faint: the object along {scene.ghosts[0].name.rpartition(' on ')[2]}"
+    ax.set_title(f"{scene.title}\n{mm}{ghosts if scene.ghosts else ''}", fontsize=10)
     mappable = ScalarMappable(norm=norm, cmap=cmap)
     fig.colorbar(mappable, ax=ax, shrink=0.6, pad=0.08, label="time t along the path")
 

@@ -9,7 +9,7 @@ what `build_scene` returns.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
 
@@ -29,6 +29,10 @@ OBJECT_COLOR = "#e8833a"
 AXES = (("x axis", "x", "#d62728"), ("y axis", "y", "#2ca02c"), ("z axis", "z", "#1f5fd6"))
 #: Points per unit time on the drawn path curves (the paths are exact, not interpolated).
 CURVE_DENSITY = 32
+#: Ghosted copies of the object drawn along a path that rotates it (at these fractions of the
+#: last step time), and how many such paths get them.
+GHOST_FRACTIONS = (1 / 3, 2 / 3, 1.0)
+GHOST_PATHS = 1
 
 
 @dataclass(frozen=True)
@@ -38,8 +42,9 @@ class MeshPart:
     Attributes
     ----------
     name : str
-        Trace name: the link name, or ``"object"``.
-    role : {"hand", "object"}
+        Trace name: the link name, ``"object"``, or ``"object at t=0.55 on path 12"``.
+    role : {"hand", "object", "ghost"}
+        A ghost is a copy of the object moved along a path (drawn faint).
     vertices : numpy.ndarray, shape (n, 3)
         Canonical coordinates.
     faces : numpy.ndarray, shape (m, 3), int64
@@ -118,6 +123,10 @@ class Scene:
         The sampler's last step time (the top of the colour scale).
     n_sampler_paths : int
         How many paths the sampler has (``len(paths)`` of them are drawn).
+    mm_per_unit : float
+        Millimetres per canonical unit (half the palm frame's depth), for axis titles.
+    ghosts : list of MeshPart
+        Copies of the object along the drawn path that rotates it most (role ``"ghost"``).
     """
 
     title: str
@@ -126,6 +135,8 @@ class Scene:
     paths: list[PathPart]
     t_max: float
     n_sampler_paths: int
+    mm_per_unit: float = 1000.0
+    ghosts: list[MeshPart] = field(default_factory=list)
 
     @property
     def trace_names(self) -> list[str]:
@@ -138,7 +149,8 @@ class Scene:
 
     def bounds(self) -> np.ndarray:
         """Axis-aligned box around every drawn point, shape (2, 3), canonical units."""
-        points = [m.vertices for m in self.meshes] + [p.points for p in self.paths]
+        points = [m.vertices for m in [*self.meshes, *self.ghosts]]
+        points += [p.points for p in self.paths]
         points += [np.zeros((1, 3))] + [a.tip[None] for a in self.axes]
         stacked = np.concatenate(points)
         return np.array([stacked.min(axis=0), stacked.max(axis=0)])
@@ -317,4 +329,43 @@ def build_scene(
         paths=path_parts(sampler, indices, centre),
         t_max=float(sampler.times.max()),
         n_sampler_paths=sampler.n_paths,
+        mm_per_unit=1000.0 / grasp.frame.scale,
+        ghosts=ghost_parts(sampler, indices, vertices, faces),
     )
+
+
+def ghost_parts(
+    sampler: PathSampler, indices: np.ndarray, vertices: np.ndarray, faces: np.ndarray
+) -> list[MeshPart]:
+    """Copies of the object along the `GHOST_PATHS` drawn paths that rotate it most, at
+    `GHOST_FRACTIONS` of the last step time: the paths' centres alone do not show rotation.
+
+    Parameters
+    ----------
+    sampler : PathSampler
+    indices : numpy.ndarray, shape (k,), int
+        The drawn paths.
+    vertices : numpy.ndarray, shape (n, 3)
+        The object at the grasp, canonical coordinates.
+    faces : numpy.ndarray, shape (m, 3), int
+
+    Returns
+    -------
+    list of MeshPart
+        Role ``"ghost"``; none when no drawn path rotates the object.
+    """
+    table = sampler.paths
+    amounts = np.abs(table.amount[indices])
+    chosen = [int(indices[k]) for k in np.argsort(-amounts, kind="stable")[:GHOST_PATHS]]
+    t_max = float(sampler.times.max())
+    ghosts = []
+    for index in chosen:
+        if table.amount[index] == 0.0:
+            continue
+        for fraction in GHOST_FRACTIONS:
+            t = fraction * t_max
+            pose = exp_se3(table.omega[index] * t, table.direction[index] * t)
+            moved = vertices @ pose[:3, :3].T + pose[:3, 3]
+            name = f"object at t={t:.2f} on path {index}"
+            ghosts.append(MeshPart(name, "ghost", moved, faces, OBJECT_COLOR))
+    return ghosts

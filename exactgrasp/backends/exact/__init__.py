@@ -7,9 +7,39 @@ array-level core), `backend` (the `Backend`), `tables` (the kernel's named table
 `tolerances`.
 """
 
-from exactgrasp.backends.exact.backend import ExactBackend
-from exactgrasp.backends.exact.intersector import ExactIntersector, Intersection, repeated_poses
-from exactgrasp.backends.exact.reference import FLOOR, RTOL, agrees, plain_error, plain_volumes
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from exactgrasp.lazy import lazy_names
+
+if TYPE_CHECKING:
+    from exactgrasp.backends.exact.backend import ExactBackend
+    from exactgrasp.backends.exact.intersector import (
+        ExactIntersector,
+        Intersection,
+        repeated_poses,
+    )
+    from exactgrasp.backends.exact.reference import FLOOR, RTOL, agrees, plain_error, plain_volumes
+
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    {
+        "exactgrasp.backends.exact.backend": ("ExactBackend",),
+        "exactgrasp.backends.exact.intersector": (
+            "ExactIntersector",
+            "Intersection",
+            "repeated_poses",
+        ),
+        "exactgrasp.backends.exact.reference": (
+            "FLOOR",
+            "RTOL",
+            "agrees",
+            "plain_error",
+            "plain_volumes",
+        ),
+    },
+)
 
 __all__ = [
     "FLOOR",

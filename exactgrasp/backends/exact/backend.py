@@ -11,13 +11,13 @@ import numpy as np
 
 from exactgrasp.backends import defaults
 from exactgrasp.backends.base import Backend, check_poses
-from exactgrasp.backends.exact.intersector import ExactIntersector
 from exactgrasp.backends.exact.options import PARAMETERS, check_options
-from exactgrasp.backends.exact.reference import RTOL
+from exactgrasp.backends.exact.tolerances import RTOL
 from exactgrasp.cache import LRUCache
 from exactgrasp.geometry.bvh import require_engine
 
 if TYPE_CHECKING:
+    from exactgrasp.backends.exact.intersector import ExactIntersector
     from exactgrasp.grasp import Grasp
 
 
@@ -83,6 +83,9 @@ class ExactBackend(Backend):
 
     def intersector(self, grasp: Grasp) -> ExactIntersector:
         """The `ExactIntersector` of a grasp, built once per `grasp.geometry_key`."""
+        # Here, not above: the class and its parameters load without numba, for ``--help``.
+        from exactgrasp.backends.exact.intersector import ExactIntersector
+
         return self._cache.get(
             grasp.geometry_key,
             lambda: ExactIntersector(

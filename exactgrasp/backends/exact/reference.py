@@ -11,12 +11,10 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.backends.base import check_poses
-from exactgrasp.backends.exact.tolerances import BOOLEAN_SLACK
+from exactgrasp.backends.exact.tolerances import BOOLEAN_SLACK, RTOL
 from exactgrasp.errors import BackendError
 from exactgrasp.geometry.manifold import to_manifold, union_solids
 
-#: Relative agreement demanded of every volume (see `agrees`).
-RTOL = 1e-9
 #: Volumes below FLOOR times the hand volume are compared in absolute terms (see `agrees`).
 FLOOR = 1e-6
 

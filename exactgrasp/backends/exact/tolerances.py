@@ -8,6 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
+#: Relative agreement demanded of every volume with the plain boolean (see
+#: `exactgrasp.backends.exact.reference.agrees`).
+RTOL = 1e-9
+
 # -- rounding units -----------------------------------------------------------------------------
 
 #: Unit roundoff of double precision (round to nearest): every error bound is a multiple.

@@ -5,7 +5,8 @@ centres of its interior voxels, each standing for a cube of volume ``V_o``, and 
 surface, each standing for ``w_s``. For every pose the points inside the hand are counted
 (`kernel`), on every core (or as many threads as `backends.base.thread_limit` allows, one in
 a batch worker). Grids, points and the hand's volume are kept per process for every backend
-instance.
+instance. Imports the backends' base, defaults and parameter checks, and its own room (that
+inside the methods: the class and its parameters load without numba, for ``--help``).
 """
 
 from __future__ import annotations
@@ -18,13 +19,12 @@ import numpy as np
 from exactgrasp.backends import defaults
 from exactgrasp.backends.base import PROGRESS_PIECES, Backend, check_poses
 from exactgrasp.backends.params import Interval, Options, Param, validate_parameters
-from exactgrasp.backends.voxel.grids import GRID_RULES, HandOccupancy, hand_occupancy
-from exactgrasp.backends.voxel.kernel import volumes_of_checked
-from exactgrasp.backends.voxel.points import ObjectPoints, object_points
 from exactgrasp.cache import LRUCache
 from exactgrasp.errors import BackendError
 
 if TYPE_CHECKING:
+    from exactgrasp.backends.voxel.grids import HandOccupancy
+    from exactgrasp.backends.voxel.points import ObjectPoints
     from exactgrasp.grasp import Grasp
 
 __all__ = ["MAX_RESOLUTION", "SURFACE_SAMPLE_MODES", "SURFACE_WEIGHTS", "VoxelBackend"]
@@ -113,7 +113,9 @@ class VoxelBackend(Backend):
         ),
         "surface_weight": Param(Options(SURFACE_WEIGHTS)),
         "seed": Param(Interval(int, 0, None), hint="seed of the surface sampler"),
-        "grid": Param(Options(GRID_RULES), hint="rounding of the grids' shorter sides"),
+        "grid": Param(
+            Options(defaults.VOXEL_GRID_RULES), hint="rounding of the grids' shorter sides"
+        ),
     }
 
     def __init__(
@@ -166,10 +168,14 @@ class VoxelBackend(Backend):
         Cached in the process per ``grasp.hand_key`` (the hash of the hand's canonical
         geometry), hand resolution and grid rule, for every `VoxelBackend`.
         """
+        from exactgrasp.backends.voxel import grids  # the kernels compile on first use
+
         hand_key = getattr(grasp, "hand_key", None)
         return _HAND_GRIDS.get(
             None if hand_key is None else (hand_key, *self._values(GRID_PARAMETERS)),
-            lambda: hand_occupancy(grasp.canonical_hand_links(), self.hand_resolution, self.grid),
+            lambda: grids.hand_occupancy(
+                grasp.canonical_hand_links(), self.hand_resolution, self.grid
+            ),
         )
 
     def object_point_set(self, grasp: Grasp) -> ObjectPoints:
@@ -180,11 +186,13 @@ class VoxelBackend(Backend):
         `VoxelBackend`.
         """
 
+        from exactgrasp.backends.voxel import points
+
         def build() -> ObjectPoints:
             supplied = None
             if self.surface_samples is None:
                 supplied = grasp.canonical_object_surface_samples()
-            return object_points(
+            return points.object_points(
                 grasp.canonical_object_bodies(),
                 self.object_resolution,
                 surface_samples=supplied,
@@ -235,6 +243,8 @@ class VoxelBackend(Backend):
 
     def _volumes(self, grasp: Grasp, poses: np.ndarray) -> np.ndarray:
         """`volumes` of poses `check_poses` returned."""
+        from exactgrasp.backends.voxel.kernel import volumes_of_checked
+
         return volumes_of_checked(self.hand_grid(grasp), self.object_point_set(grasp), poses)
 
     def volumes_with_progress(

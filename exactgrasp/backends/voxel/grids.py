@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from exactgrasp.backends.defaults import VOXEL_GRID_RULES
 from exactgrasp.errors import BackendError
 from exactgrasp.geometry.winding import winding_inside_lattice
 
@@ -89,7 +90,7 @@ def stack_triangles(shells: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
 
 
 #: How many cubic voxels a shorter side gets: "floor" (the authors' code) or "round".
-GRID_RULES = ("floor", "round")
+GRID_RULES = VOXEL_GRID_RULES
 
 
 def grid_layout(
