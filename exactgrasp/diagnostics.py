@@ -5,8 +5,7 @@
 and returns the metadata entries that record it; `exactgrasp.descriptor.compute_descriptor`
 calls it. `third_party_warnings_ignored` keeps warnings raised inside the libraries under
 exactgrasp (dask, numba, trimesh, ...) from the users of `run_batch` and of the command line.
-See ``docs/diagnostics.md``. May import `exactgrasp.errors`, `exactgrasp.cache`,
-`exactgrasp.geometry`, `exactgrasp.grasp` and `exactgrasp.backends`.
+See ``docs/diagnostics.md``.
 """
 
 from __future__ import annotations

@@ -6,7 +6,6 @@ package without the numerical libraries (numba, trimesh, scipy, mujoco) that its
 in; they load when a name that needs them is first used. Each package also imports the same
 names under ``TYPE_CHECKING``, so that type checkers, editors and the API reference see them.
 
-May import: nothing from exactgrasp.
 """
 
 from __future__ import annotations

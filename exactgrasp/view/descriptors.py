@@ -6,7 +6,6 @@ neighbouring rows are neighbouring directions. `plot_descriptors` draws a grid o
 (one row per grasp, one column per backend) on one colour scale with its unit;
 `write_descriptor_figure` writes it as a PNG (the figure of ``exactgrasp demo``).
 
-May import: `exactgrasp.errors`, `exactgrasp.paths`.
 """
 
 from __future__ import annotations

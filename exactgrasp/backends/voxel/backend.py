@@ -5,8 +5,8 @@ centres of its interior voxels, each standing for a cube of volume ``V_o``, and 
 surface, each standing for ``w_s``. For every pose the points inside the hand are counted
 (`kernel`), on every core (or as many threads as `backends.base.thread_limit` allows, one in
 a batch worker). Grids, points and the hand's volume are kept per process for every backend
-instance. Imports the backends' base, defaults and parameter checks, and its own room (that
-inside the methods: the class and its parameters load without numba, for ``--help``).
+instance. Its own room loads inside the methods: the class and its parameters load without
+numba, for ``--help``.
 """
 
 from __future__ import annotations
