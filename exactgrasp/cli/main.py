@@ -22,6 +22,7 @@ from exactgrasp.cli import (
     compare,
     demo,
     descriptor,
+    evaluate,
     inspect,
     overlap,
     show,
@@ -34,7 +35,7 @@ from exactgrasp.version import __version__
 __all__ = ["COMMANDS", "build_parser", "main"]
 
 #: The sub-command modules, in the order ``exactgrasp --help`` lists them.
-COMMANDS = (demo, descriptor, compare, close, inspect, show, overlap, validate, batch)
+COMMANDS = (demo, descriptor, compare, close, inspect, show, overlap, validate, batch, evaluate)
 
 
 def build_parser() -> argparse.ArgumentParser:
