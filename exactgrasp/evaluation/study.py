@@ -159,8 +159,13 @@ def _matrices(stacks, times, specs=CANDIDATES, symmetric=True) -> dict[str, np.n
     return out
 
 
-def clusters_section(study: Study, sampler: PathSampler, variant: str = "adjusted") -> dict:
-    """Every candidate distance and baseline on the cereal-box clusters, for both backends."""
+def clusters_section(
+    study: Study,
+    sampler: PathSampler,
+    variant: str = "adjusted",
+    backends: tuple[str, ...] = ("voxel", "exact"),
+) -> dict:
+    """Every candidate distance and baseline on the cereal-box clusters, for each backend."""
     grasps, clusters = cereal_grasps(study.barrett, variant)
     pairs = pairs_from_groups([g.name for g in grasps], clusters)
     result: dict[str, Any] = {
@@ -170,7 +175,7 @@ def clusters_section(study: Study, sampler: PathSampler, variant: str = "adjuste
         "sampler": sampler.params,
         "backends": {},
     }
-    for backend in ("voxel", "exact"):
+    for backend in backends:
         study.log(f"clusters ({variant}): {backend}")
         stacks, seconds = study.stacks(grasps, sampler, backend, BARRETT_SYMMETRY)
         result["backends"][backend] = {
@@ -295,7 +300,7 @@ def sampling_section(study: Study, samplers: dict[str, dict], distance: str, bac
 
 def raw_section(study: Study, sampler: PathSampler, adjusted: dict) -> dict:
     """The clusters with the raw (penetrating) records, and how far each moved in adjusting."""
-    raw = clusters_section(study, sampler, "raw")
+    raw = clusters_section(study, sampler, "raw", ("voxel",))
     grasps_a, _ = cereal_grasps(study.barrett, "adjusted")
     grasps_r, _ = cereal_grasps(study.barrett, "raw")
     both = grasps_a + grasps_r
