@@ -299,6 +299,7 @@ def test_pose_baseline_is_zero_across_object_symmetries():
     pose_d = baseline_matrix(grasps, "pose")
     assert pose_d[0, 1] == pytest.approx(0.0, abs=1e-9)
     assert pose_d[0, 2] == pytest.approx(0.01 * scale)
+    assert baseline_matrix(grasps, "origin")[0, 2] == pytest.approx(0.01 * scale)
     joints = baseline_matrix(grasps, "joints")
     assert joints[0, 1] == 0.0
     barrett = eg.Grasp(eg.hands.barrett(), box, object_pose=pose, name="barrett")
@@ -382,3 +383,8 @@ def test_cereal_box_clusters_joint_baseline(shared_data):
     pairs = pairs_from_groups([g.name for g in grasps], clusters)
     ev = evaluate_matrix(baseline_matrix(grasps, "joints"), pairs, n_boot=100)
     assert ev.auc == pytest.approx(0.882, abs=5e-4)
+    # the box file's origin is a corner: its position also tells which way round the box is
+    origin = evaluate_matrix(baseline_matrix(grasps, "origin"), pairs, n_boot=100)
+    assert origin.auc == pytest.approx(0.898, abs=5e-4)
+    centre = evaluate_matrix(baseline_matrix(grasps, "position"), pairs, n_boot=100)
+    assert centre.auc == pytest.approx(0.637, abs=5e-4)

@@ -4,6 +4,9 @@
   joints); only between grasps of one hand model.
 - ``"position"``: distance of the object's centre of volume in the hand's canonical frame
   (canonical units, the paths' own unit of length).
+- ``"origin"``: distance of the origin of the object's own coordinates in the canonical frame
+  (the translation of ``object_pose``). Not invariant to the object's symmetries: for a box
+  whose file puts the origin at a corner, it also tells which way round the box is.
 - ``"pose"``: ``position`` plus the rotation angle (radians) between the two object
   orientations, the smallest over the object's symmetries
   (`exactgrasp.evaluation.symmetry.object_symmetries`): one radian weighs like one canonical
@@ -37,7 +40,7 @@ __all__ = [
 ]
 
 #: The baselines by name.
-BASELINES = ("joints", "position", "pose", "contacts")
+BASELINES = ("joints", "position", "origin", "pose", "contacts")
 #: A link closer than this (m) to the object touches it.
 CONTACT_GAP = 1e-3
 
@@ -103,7 +106,7 @@ def baseline_matrix(grasps: Sequence[Grasp], name: str, gap: float = CONTACT_GAP
     Parameters
     ----------
     grasps : sequence of Grasp, length n
-    name : {"joints", "position", "pose", "contacts"}
+    name : {"joints", "position", "origin", "pose", "contacts"}
     gap : float
         Contact distance (m) of the ``"contacts"`` baseline.
 
@@ -115,6 +118,9 @@ def baseline_matrix(grasps: Sequence[Grasp], name: str, gap: float = CONTACT_GAP
     if name == "joints":
         x = joint_vectors(grasps)
         return cdist(x, x)
+    if name == "origin":
+        origins = np.array([(g.frame.matrix @ g.object_pose)[:3, 3] for g in grasps])
+        return cdist(origins, origins)
     if name in ("position", "pose"):
         centres, rotations = object_placements(grasps)
         matrix = cdist(centres, centres)

@@ -187,7 +187,7 @@ def clusters_section(
         }
     result["baselines"] = {
         b: study.auc(baseline_matrix(grasps, b), pairs, f"baseline: {b}")
-        for b in ("joints", "position", "pose", "contacts")
+        for b in ("joints", "position", "origin", "pose", "contacts")
     }
     return result
 

@@ -80,7 +80,9 @@ def _clusters(s: dict, default: str) -> list[str]:
         f"{_ci(best[1])}. The goal of {GOAL:.2f} is "
         + ("reached." if reached else "not reached with the voxel backend.")
         + " Baselines: `joints` is the L2 distance of the 8 joint values (radians); "
-        "`position` the distance of the box's centre in the canonical frame; `pose` that plus "
+        "`position` the distance of the box's centre in the canonical frame; `origin` the "
+        "distance of the box file's origin (a corner of the box), which also tells which way "
+        "round the box is; `pose` the centre distance plus "
         "the rotation angle between the box orientations, the smallest over the box's four "
         "proper symmetries; `contacts` the Jaccard distance of the links within 1 mm of the "
         "box.",
