@@ -388,3 +388,59 @@ def test_cereal_box_clusters_joint_baseline(shared_data):
     assert origin.auc == pytest.approx(0.898, abs=5e-4)
     centre = evaluate_matrix(baseline_matrix(grasps, "position"), pairs, n_boot=100)
     assert centre.auc == pytest.approx(0.637, abs=5e-4)
+
+
+# -- the report's rules ---------------------------------------------------------------------
+
+
+def _entry(value):
+    return {"auc": value}
+
+
+def test_default_rule_needs_the_noise_separation_of_l2_then_the_best_cluster_auc():
+    from exactgrasp.evaluation.study import choose_default
+
+    names = ["l2", "l2 min mirror-x", "cbrt", "cbrt min mirror-x", "escape:0.05"]
+    voxel = dict(zip(names, [0.80, 0.90, 0.85, 0.86, 0.95], strict=True))
+    exact = dict(zip(names, [0.80, 0.90, 0.85, 0.86, 0.95], strict=True))
+    clusters = {
+        "backends": {
+            "voxel": {"distances": {k: _entry(v) for k, v in voxel.items()}},
+            "exact": {"distances": {k: _entry(v) for k, v in exact.items()}},
+        }
+    }
+    # escape separates noisy copies worse than l2 and the mirror minimum slightly worse
+    noise_auc = dict(zip(names, [0.99, 0.985, 0.995, 0.985, 0.9], strict=True))
+    noise = {"levels": {"a": {k: _entry(v) for k, v in noise_auc.items()}}}
+    chosen = choose_default(clusters, noise)
+    assert chosen["default"] == "cbrt"
+    assert [r["name"] for r in chosen["rows"] if not r["qualifies"]] == [
+        "l2 min mirror-x",
+        "cbrt min mirror-x",
+        "escape:0.05",
+    ]
+    # within 0.005 of the best, the plain distance earlier in the list wins
+    voxel["cbrt min mirror-x"] = exact["cbrt min mirror-x"] = 0.80
+    noise_auc["l2 min mirror-x"] = 0.99
+    noise = {"levels": {"a": {k: _entry(v) for k, v in noise_auc.items()}}}
+    clusters["backends"]["voxel"]["distances"]["l2"] = _entry(0.898)
+    clusters["backends"]["exact"]["distances"]["l2"] = _entry(0.898)
+    assert choose_default(clusters, noise)["default"] == "l2"
+
+
+def test_smallest_sampler_within_the_largest_interval():
+    from exactgrasp.evaluation.text import smallest_within_interval
+
+    def row(n, auc, low, backend="voxel", steps=9):
+        return {
+            "n_paths": n,
+            "n_steps": steps,
+            "backend": backend,
+            "auc": {"auc": auc, "low": low, "high": 1.0},
+        }
+
+    rows = [row(24, 0.70, 0.6), row(98, 0.83, 0.7), row(474, 0.85, 0.75), row(2498, 0.86, 0.8)]
+    rows.append(row(474, 0.99, 0.9, steps=3))  # other step counts are not sizes
+    found = smallest_within_interval(rows, "voxel")
+    assert found["smallest"]["n_paths"] == 98 and found["largest"]["n_paths"] == 2498
+    assert smallest_within_interval(rows, "exact") is None

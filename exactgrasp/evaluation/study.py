@@ -145,9 +145,12 @@ class Study:
     def auc(self, matrix: np.ndarray, pairs, name: str, unit: str = "grasp") -> dict[str, Any]:
         """AUC, interval and per-cluster numbers of one matrix."""
         ev = evaluate_matrix(matrix, pairs, name, self.n_boot, self.seed, unit)
-        return {k: v for k, v in ev.to_dict().items() if k not in ("curve",)} | {
-            "curve": {"fpr": ev.curve[0].tolist(), "tpr": ev.curve[1].tolist()}
-        }
+        out = ev.to_dict()
+        if unit == "grasp" and pairs.grasp_group is not None:
+            # The wider interval of resampling whole clusters, for comparison.
+            by_group = evaluate_matrix(matrix, pairs, name, self.n_boot, self.seed, "group")
+            out["group_interval"] = [by_group.low, by_group.high]
+        return out
 
 
 def _matrices(stacks, times, specs=CANDIDATES, symmetric=True) -> dict[str, np.ndarray]:

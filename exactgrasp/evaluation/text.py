@@ -76,7 +76,9 @@ def _clusters(s: dict, default: str) -> list[str]:
     lines += [
         "",
         f"The default distance, **{default}**, reaches AUC {_ci(d)} with the voxel backend and "
-        f"{_ci(ex[default])} with the exact one; the best baseline, {best[0]}, "
+        f"{_ci(ex[default])} with the exact one (resampling whole clusters instead of grasps, "
+        f"the voxel interval widens to {_f(d['group_interval'][0])} .. "
+        f"{_f(d['group_interval'][1])}); the best baseline, {best[0]}, "
         f"{_ci(best[1])}. The goal of {GOAL:.2f} is "
         + ("reached." if reached else "not reached with the voxel backend.")
         + " Baselines: `joints` is the L2 distance of the 8 joint values (radians); "
