@@ -397,7 +397,7 @@ def _entry(value):
     return {"auc": value}
 
 
-def test_default_rule_needs_the_noise_separation_of_l2_then_the_best_cluster_auc():
+def test_default_rule_needs_noise_auc_0_99_then_the_best_cluster_auc():
     from exactgrasp.evaluation.study import choose_default
 
     names = ["l2", "l2 min mirror-x", "cbrt", "cbrt min mirror-x", "escape:0.05"]
@@ -444,3 +444,16 @@ def test_smallest_sampler_within_the_largest_interval():
     found = smallest_within_interval(rows, "voxel")
     assert found["smallest"]["n_paths"] == 98 and found["largest"]["n_paths"] == 2498
     assert smallest_within_interval(rows, "exact") is None
+
+
+def test_paired_difference_of_two_distances():
+    matrix, pairs = _clustered(n_per=5, n_groups=3, noise=1.0, seed=2)
+    d = matrix[pairs.first, pairs.second]
+    noisy = d + np.random.default_rng(0).normal(0, 1.0, d.size)
+    out = bootstrap_auc(d, pairs.label, pairs.first, pairs.second, n_boot=300, reference=noisy)[
+        "difference"
+    ]
+    assert out["value"] == pytest.approx(auc(d, pairs.label) - auc(noisy, pairs.label))
+    assert out["low"] <= out["value"] <= out["high"]
+    same = bootstrap_auc(d, pairs.label, pairs.first, pairs.second, n_boot=50, reference=d)
+    assert same["difference"] == {"value": 0.0, "low": 0.0, "high": 0.0, "below_zero": 0.0}

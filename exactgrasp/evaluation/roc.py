@@ -144,6 +144,7 @@ def bootstrap_auc(
     n_boot: int = 2000,
     level: float = 0.95,
     seed: int = 0,
+    reference: Any = None,
 ) -> dict[str, Any]:
     """Percentile bootstrap interval of `auc`, resampling grasps (or groups, or pairs).
 
@@ -163,12 +164,17 @@ def bootstrap_auc(
         Coverage of the interval, e.g. 0.95.
     seed : int
         Seed of `numpy.random.default_rng`; the same seed gives the same interval.
+    reference : array_like, shape (n_pairs,), optional
+        Another distance on the same pairs: the difference of the two AUCs is then
+        bootstrapped on the same replicates (a paired comparison).
 
     Returns
     -------
     dict
         ``auc`` (on all pairs), ``low``, ``high``, ``std``, ``unit``, ``n_boot``, ``level``,
-        ``seed``, ``n_valid`` (replicates holding both classes).
+        ``seed``, ``n_valid`` (replicates holding both classes); with ``reference``, also
+        ``difference``: ``value`` (AUC minus the reference's), ``low``, ``high`` and
+        ``below_zero`` (the fraction of replicates where it is negative).
     """
     distance, grade = _check(distance, label)
     first = np.asarray(first, dtype=np.int64).ravel()
@@ -190,7 +196,11 @@ def bootstrap_auc(
                 f"groups names {group_index.size} grasps but the pairs use {n_grasps}."
             )
         n_groups = int(group_index.max()) + 1
-    samples = []
+    if reference is not None:
+        reference = np.asarray(reference, dtype=np.float64).ravel()
+        if reference.shape != distance.shape:
+            raise EvaluationError("reference must give one distance per pair.")
+    samples, differences = [], []
     for _ in range(n_boot):
         if unit == "pair":
             drawn = rng.integers(0, distance.size, distance.size)
@@ -205,10 +215,13 @@ def bootstrap_auc(
         value = _concordance(distance, grade, weight.astype(np.float64))
         if np.isfinite(value):
             samples.append(value)
+            if reference is not None:
+                base = _concordance(reference, grade, weight.astype(np.float64))
+                differences.append(value - base)
     samples = np.asarray(samples)
     tail = (1.0 - level) / 2.0
     low, high = np.quantile(samples, [tail, 1.0 - tail]) if samples.size else (float("nan"),) * 2
-    return {
+    result = {
         "auc": _concordance(distance, grade, np.ones_like(distance)),
         "low": float(low),
         "high": float(high),
@@ -219,3 +232,14 @@ def bootstrap_auc(
         "seed": int(seed),
         "n_valid": int(samples.size),
     }
+    if reference is not None and differences:
+        differences = np.asarray(differences)
+        d_low, d_high = np.quantile(differences, [tail, 1.0 - tail])
+        ones = np.ones_like(distance)
+        result["difference"] = {
+            "value": result["auc"] - _concordance(reference, grade, ones),
+            "low": float(d_low),
+            "high": float(d_high),
+            "below_zero": float(np.mean(differences < 0)),
+        }
+    return result
