@@ -340,22 +340,23 @@ def raw_section(study: Study, sampler: PathSampler, adjusted: dict) -> dict:
 
 
 def gripper_grasps(study: Study, grasps: list[Grasp]) -> tuple[list[Grasp], list[dict]]:
-    """The same object placements, relative to the canonical frame, in the parallel gripper.
+    """The same object placements, relative to the palm frame, in the parallel gripper.
 
-    A placement keeps its rotation and its position in canonical units; the gripper opens
-    fully, the object is backed off the palm where it penetrates, and the jaws close until
-    they touch (`close_fingers`). Placements where the jaws touch nothing, or that cannot be
-    closed, are dropped.
+    A placement keeps its rotation and its position in metres relative to the palm frame (the
+    canonical frame without its scale: the box does not shrink with the hand); the gripper
+    opens fully, the object is backed off the palm where it penetrates, and the jaws close
+    until they touch (`close_fingers`). Placements where the jaws touch nothing, that had to
+    be backed off more than `GRIPPER_BACKOFF`, or that cannot be closed, are dropped.
     """
     from exactgrasp.hands.gripper import parallel_gripper
 
     out, notes = [], []
     for g in grasps:
         hand = parallel_gripper()
-        # Canonical rotation and position kept; the object keeps its size in metres.
-        target = g.frame.matrix @ g.object_pose
-        target[:3, :3] *= hand.frame.scale / g.frame.scale
-        pose = np.linalg.inv(hand.frame.matrix) @ target
+        palm_b = g.frame.matrix / g.frame.scale
+        palm_g = hand.frame.matrix / hand.frame.scale
+        palm_b[3, 3] = palm_g[3, 3] = 1.0
+        pose = np.linalg.inv(palm_g) @ palm_b @ g.object_pose
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -367,6 +368,11 @@ def gripper_grasps(study: Study, grasps: list[Grasp]) -> tuple[list[Grasp], list
         if not links:
             notes.append({"grasp": g.name, "skipped": "the jaws close without touching"})
             continue
+        if closed.backoff_distance > GRIPPER_BACKOFF:
+            notes.append(
+                {"grasp": g.name, "skipped": f"backed off {closed.backoff_distance * 1e3:.0f} mm"}
+            )
+            continue
         name = g.name.replace("adjusted/", "gripper/")
         out.append(Grasp(closed.hand, g.object, closed.object_pose, name=name))
         notes.append(
@@ -374,6 +380,10 @@ def gripper_grasps(study: Study, grasps: list[Grasp]) -> tuple[list[Grasp], list
         )
     return out, notes
 
+
+#: Largest back-off (m) of a gripper placement that is kept: most placements need 17 .. 20 mm
+#: to clear the open jaws (set after seeing that spread, before any AUC).
+GRIPPER_BACKOFF = 0.02
 
 #: How the hands section puts the descriptors of different hands on one scale.
 NORMALISATIONS = ("hand volume", "none", "hull volume", "own maximum")

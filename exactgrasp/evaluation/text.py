@@ -243,10 +243,12 @@ def _hands(s: dict) -> list[str]:
         "hand model is available without a download here (no model package is installed, and "
         "nothing is fetched at run time), so the third hand is missing from this report.",
         "",
-        f"The gripper holds the box at the Barrett grasps' placements relative to the canonical "
-        f"frame (same rotation, same position in canonical units), opened, backed off the palm "
-        f"where needed and closed with `close_fingers`. {h['n_placements']} placements keep a "
-        f"contact; {len(skipped)} were dropped (the jaws touched nothing or could not close). "
+        f"The gripper holds the box at the Barrett grasps' placements relative to the palm frame "
+        f"(same rotation, same position in metres; the canonical frame's scale would shrink "
+        f"the box's distances with the smaller hand and bury it in the gripper), opened, backed "
+        f"off the palm where needed and closed with `close_fingers`. {h['n_placements']} "
+        f"placements are kept; {len(skipped)} were dropped (backed off more than 20 mm, or the "
+        f"jaws touched nothing). "
         "Pairs: the same placement in the two hands ('same') against two placements in one "
         "hand ('different'). Hand volumes: Barrett "
         f"{h['hand_volume_m3']['barrett'] * 1e6:.1f} cm^3, gripper "
