@@ -60,6 +60,15 @@ SAMPLING: dict[str, dict[str, Any]] = {
 QUICK_SAMPLING = {k: SAMPLING[k] for k in ("24 paths", "34 paths")}
 
 
+def _without_curves(value: Any) -> Any:
+    """The summary without its ROC curves (they are in the figures; kept out of the JSON)."""
+    if isinstance(value, dict):
+        return {k: _without_curves(v) for k, v in value.items() if k != "curve"}
+    if isinstance(value, list):
+        return [_without_curves(v) for v in value]
+    return value
+
+
 def build_report(
     data: str | Path,
     out: str | Path,
@@ -150,7 +159,9 @@ def build_report(
         "seconds": time.perf_counter() - start,
     }
     out.mkdir(parents=True, exist_ok=True)
-    (out / "summary.json").write_text(json.dumps(summary, indent=1, default=float))
+    (out / "summary.json").write_text(
+        json.dumps(_without_curves(summary), indent=1, default=float)
+    )
     (out / "report.md").write_text(report_markdown(summary))
     log(f"wrote {out / 'report.md'}")
     return summary

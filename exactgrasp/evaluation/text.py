@@ -157,9 +157,13 @@ def _sampling(s: dict) -> list[str]:
     lines = [
         "## 4. Sampling rate against cost",
         "",
-        f"Distance {sm['distance']}. Seconds: descriptor computation per grasp (with the "
-        "mirror's second set of paths where the distance uses it), on two cores shared with "
-        "other work, so they are rough; the ratios between rows are what counts.",
+        f"Distance {sm['distance']}. Seconds: the descriptor's own recorded computation time, "
+        "mean per grasp, on two cores shared with other work. They are rough: a voxel row "
+        "includes whatever one-off cost (compiling, the hand's grid) fell to it, so the voxel "
+        "seconds do not grow smoothly with the paths; the exact backend's include about 2 s of "
+        "preparation per grasp. The number of poses (paths x steps) is the clean measure of "
+        "cost. Noise ratio: median between-grasp over median within-grasp distance at the two "
+        "noise levels (voxel).",
         "",
         "| sampler | paths | steps | backend | s / grasp | cluster AUC | L2 AUC "
         "| noise: ratio of medians |",
@@ -190,7 +194,7 @@ def _sampling(s: dict) -> list[str]:
             )
     lines += [
         "",
-        "![AUC and noise separation against seconds](figures/sampling.png)",
+        "![AUC and noise separation against poses](figures/sampling.png)",
         "",
         "![AUC against steps per path](figures/steps.png)",
         "",
