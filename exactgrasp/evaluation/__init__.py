@@ -3,8 +3,9 @@
 `roc` (AUC, ROC curve, bootstrap over grasps), `pairs` (labelled pairs from groups or a CSV),
 `symmetry` (starting configurations), `distances` (the descriptor distances), `baselines`
 (distances from the grasps themselves), `evaluate` (`evaluate`, `evaluate_matrix`), `write`
-(the files of one evaluation) and `study` with `__main__` (the committed report
-``docs/reports/descriptor-meaning/``, ``python -m exactgrasp.evaluation``). The
+(the files of one evaluation), and the committed report
+``docs/reports/descriptor-meaning/`` (``python -m exactgrasp.evaluation``): `study` (the
+sections' numbers), `figures`, `text`, `run` and `__main__`. The
 ``exactgrasp evaluate`` command is `exactgrasp.cli.evaluate`.
 
 May import: `exactgrasp.errors` and the `exactgrasp.evaluation` modules; never
