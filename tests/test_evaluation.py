@@ -457,3 +457,19 @@ def test_paired_difference_of_two_distances():
     assert out["low"] <= out["value"] <= out["high"]
     same = bootstrap_auc(d, pairs.label, pairs.first, pairs.second, n_boot=50, reference=d)
     assert same["difference"] == {"value": 0.0, "low": 0.0, "high": 0.0, "below_zero": 0.0}
+
+
+def test_the_recommended_distance_is_a_descriptor_distance_kind():
+    from exactgrasp.evaluation.distances import RECOMMENDED_DISTANCE
+
+    sampler = eg.PathSampler(**TINY)
+    rng = np.random.default_rng(5)
+    a, b = (
+        eg.Descriptor(rng.uniform(0, 0.2, (sampler.n_paths, 3)), {"sampler": sampler.params})
+        for _ in range(2)
+    )
+    matrix = distance_matrix([a.values[None], b.values[None]], RECOMMENDED_DISTANCE, sampler.times)
+    assert eg.distance(a, b, RECOMMENDED_DISTANCE) == pytest.approx(matrix[0, 1])
+    assert eg.distance(a, b, "cbrt") == pytest.approx(
+        np.linalg.norm(np.cbrt(a.values) - np.cbrt(b.values))
+    )

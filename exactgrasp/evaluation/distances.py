@@ -38,6 +38,7 @@ from exactgrasp.paths.sampler import PathSampler
 __all__ = [
     "DEFAULT_THRESHOLD",
     "DISTANCES",
+    "RECOMMENDED_DISTANCE",
     "configuration_values",
     "distance_matrix",
     "escape_times",
@@ -47,6 +48,9 @@ __all__ = [
 
 #: The descriptor distances by name.
 DISTANCES = ("l2", "l2_diff", "cbrt", "escape")
+#: The distance the report "What the descriptor tells you" chooses by its rule
+#: (`exactgrasp.evaluation.study.choose_default`); also ``exactgrasp.distance(a, b, "cbrt")``.
+RECOMMENDED_DISTANCE = "cbrt"
 #: The ``"escape"`` distance's default threshold, as a fraction of the hand volume.
 DEFAULT_THRESHOLD = 0.01
 
