@@ -22,7 +22,7 @@ from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.progress import compile_seconds, progress_bar
 
-DISTANCE_KINDS = ("l2", "l2_diff")
+DISTANCE_KINDS = ("l2", "l2_diff", "cbrt")
 
 
 class Descriptor:
@@ -223,6 +223,8 @@ def _features(d: Descriptor, kind: str) -> np.ndarray:
     if kind == "l2_diff":
         # Change along each path, step to step (the origin is not a sample, so n_steps - 1).
         return np.diff(d.values, axis=1).ravel()
+    if kind == "cbrt":
+        return np.cbrt(d.values).ravel()
     raise DescriptorError(f"distance kind {kind!r} is unknown; use one of {DISTANCE_KINDS}.")
 
 
@@ -232,10 +234,12 @@ def distance(a: Descriptor, b: Descriptor, kind: str = "l2") -> float:
     Parameters
     ----------
     a, b : Descriptor
-    kind : {"l2", "l2_diff"}
+    kind : {"l2", "l2_diff", "cbrt"}
         ``"l2"``: Euclidean norm of the difference of the values (the paper's main choice).
         ``"l2_diff"``: Euclidean norm of the difference of the step-to-step changes along each
-        path.
+        path. ``"cbrt"``: Euclidean norm of the difference of the values' cube roots, the
+        distance the report "What the descriptor tells you" recommends
+        (``docs/descriptor-meaning.md``).
 
     Returns
     -------
@@ -251,7 +255,7 @@ def pairwise_distances(descriptors: Sequence[Descriptor], kind: str = "l2") -> n
     Parameters
     ----------
     descriptors : sequence of Descriptor, length n
-    kind : {"l2", "l2_diff"}
+    kind : {"l2", "l2_diff", "cbrt"}
 
     Returns
     -------

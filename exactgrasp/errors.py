@@ -267,6 +267,10 @@ class DataError(ExactGraspError, FileNotFoundError):
     """The shared data folder is missing or incomplete."""
 
 
+class EvaluationError(ExactGraspError, ValueError):
+    """Labelled pairs that cannot be evaluated: bad labels, unknown grasps, one class only."""
+
+
 def warn_caller(message: str) -> None:
     """Warn at the first caller outside exactgrasp, however deep inside the package we are."""
     frame, level = sys._getframe(1), 2

@@ -40,7 +40,8 @@ LAYERS = {
     "compare": 7,
     "batch": 8,
     "report": 8,
-    "cli": 9,
+    "evaluation": 9,
+    "cli": 10,
 }
 
 

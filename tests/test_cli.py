@@ -32,8 +32,8 @@ ROOT = Path(__file__).resolve().parents[1]
 #: A sampler of 5 paths, so that every run here is quick.
 TINY = '{"n_translations": 2, "n_axes": 1, "n_amounts": 1}'
 COARSE = ["--param", "object_resolution=12", "--param", "hand_resolution=24"]
-SAMPLER_COMMANDS = ("demo", "descriptor", "compare", "show", "batch")
-BACKEND_COMMANDS = ("demo", "descriptor", "compare", "batch")
+SAMPLER_COMMANDS = ("demo", "descriptor", "compare", "show", "batch", "evaluate")
+BACKEND_COMMANDS = ("demo", "descriptor", "compare", "batch", "evaluate")
 GRASP_FILE_COMMANDS = ("descriptor", "compare", "close", "show")
 
 
@@ -164,6 +164,7 @@ def test_sampler_and_steps_are_the_same_option_everywhere(command):
         "compare": ["g.json"],
         "show": ["g.json"],
         "batch": ["m.jsonl", "--out", "o"],
+        "evaluate": ["p.csv", "-o", "o"],
     }[command]
     args = build_parser().parse_args([command, *positional, "--sampler", TINY, "--steps", "2"])
     assert sampler_from_args(args).params == eg.PathSampler(2, 1, 1, n_steps=2).params

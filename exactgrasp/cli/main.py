@@ -19,6 +19,7 @@ from exactgrasp.cli import (
     compare,
     demo,
     descriptor,
+    evaluate,
     inspect,
     overlap,
     show,
@@ -31,7 +32,7 @@ from exactgrasp.version import __version__
 __all__ = ["COMMANDS", "build_parser", "main"]
 
 #: The sub-command modules, in the order ``exactgrasp --help`` lists them.
-COMMANDS = (demo, descriptor, compare, close, inspect, show, overlap, validate, batch)
+COMMANDS = (demo, descriptor, compare, close, inspect, show, overlap, validate, batch, evaluate)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,42 @@
+"""``python -m exactgrasp.evaluation``: build the report "What the descriptor tells you"."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+
+from exactgrasp.datapath import data_dir
+from exactgrasp.errors import run_reporting_errors
+from exactgrasp.evaluation.run import build_report
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m exactgrasp.evaluation",
+        description="Build docs/reports/descriptor-meaning/: descriptor distances on the "
+        "authors' cereal-box clusters, the noise test, the sampling trade-off, raw against "
+        "contact-adjusted grasps and a second hand.",
+    )
+    parser.add_argument("--data", default=None, help="shared data folder (default: found)")
+    parser.add_argument("--out", default="docs/reports/descriptor-meaning", help="report folder")
+    parser.add_argument(
+        "--cache", default=".evaluation-cache", help="descriptor and section cache folder"
+    )
+    parser.add_argument("--quick", action="store_true", help="small samplers: minutes")
+    parser.add_argument("--fresh", action="store_true", help="recompute the sections")
+    parser.add_argument("--n-boot", type=int, default=2000, help="bootstrap replicates")
+    args = parser.parse_args(argv)
+    command = "python -m exactgrasp.evaluation " + " ".join(map(shlex.quote, argv or sys.argv[1:]))
+
+    def run(a: argparse.Namespace) -> int:
+        build_report(
+            a.data or data_dir(), a.out, a.cache, a.quick, a.fresh, a.n_boot, command.strip()
+        )
+        return 0
+
+    return run_reporting_errors(run, args, prog="python -m exactgrasp.evaluation")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

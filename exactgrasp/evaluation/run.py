@@ -1,0 +1,167 @@
+"""Build the report "What the descriptor tells you": every section, its figures, one Markdown.
+
+``python -m exactgrasp.evaluation`` runs `build_report`. Each section's numbers are kept in
+``CACHE/sections/NAME.json`` (with the descriptors in ``CACHE/descriptors``), so a second run
+only redraws and rewrites; ``--fresh`` recomputes the sections (descriptors stay cached).
+
+May import: `exactgrasp.paths`, `exactgrasp.version` and the `exactgrasp.evaluation` modules
+study, figures and write.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from exactgrasp.evaluation import figures as fig
+from exactgrasp.evaluation.study import (
+    Study,
+    choose_default,
+    clusters_section,
+    hands_section,
+    noise_section,
+    raw_section,
+    sampling_section,
+)
+from exactgrasp.evaluation.text import report_markdown
+from exactgrasp.paths.sampler import PathSampler
+from exactgrasp.version import __version__
+
+__all__ = ["SAMPLING", "build_report"]
+
+
+def _s(n_t: int, n_a: int, n_r: int, n_steps: int = 9) -> dict[str, int]:
+    return {"n_translations": n_t, "n_axes": n_a, "n_amounts": n_r, "n_steps": n_steps}
+
+
+#: The sampling trade-off's samplers: sizes from 24 paths to five times the balanced preset,
+#: then the balanced preset's paths with other step counts; which backends run each (the
+#: exact backend costs about a minute per grasp at the balanced preset on two shared cores,
+#: so it runs at three sizes only).
+SAMPLING: dict[str, dict[str, Any]] = {
+    "24 paths": {"sampler": _s(4, 2, 2), "backends": ("voxel", "exact"), "noise": True},
+    "34 paths": {"sampler": _s(6, 2, 2), "backends": ("voxel",), "noise": True},
+    "98 paths": {"sampler": _s(10, 2, 4), "backends": ("voxel", "exact"), "noise": True},
+    "194 paths": {"sampler": _s(14, 3, 4), "backends": ("voxel",), "noise": True},
+    "balanced": {"sampler": _s(18, 4, 6), "backends": ("voxel", "exact"), "noise": True},
+    "674 paths": {"sampler": _s(26, 4, 6), "backends": ("voxel",), "noise": True},
+    "1368 paths": {"sampler": _s(36, 6, 6), "backends": ("voxel",), "noise": True},
+    "2498 paths": {"sampler": _s(50, 6, 8), "backends": ("voxel",), "noise": True},
+    "balanced, 3 steps": {"sampler": _s(18, 4, 6, 3), "backends": ("voxel",)},
+    "balanced, 5 steps": {"sampler": _s(18, 4, 6, 5), "backends": ("voxel",)},
+    "balanced, 15 steps": {"sampler": _s(18, 4, 6, 15), "backends": ("voxel",)},
+}
+
+#: A run of a few minutes for checking the machinery (not the committed report).
+QUICK_SAMPLING = {k: SAMPLING[k] for k in ("24 paths", "34 paths")}
+
+
+def _without_curves(value: Any) -> Any:
+    """The summary without its ROC curves (they are in the figures; kept out of the JSON)."""
+    if isinstance(value, dict):
+        return {k: _without_curves(v) for k, v in value.items() if k != "curve"}
+    if isinstance(value, list):
+        return [_without_curves(v) for v in value]
+    return value
+
+
+def build_report(
+    data: str | Path,
+    out: str | Path,
+    cache: str | Path,
+    quick: bool = False,
+    fresh: bool = False,
+    n_boot: int = 2000,
+    command: str = "python -m exactgrasp.evaluation",
+    log: Callable[[str], None] = print,
+) -> dict[str, Any]:
+    """Compute (or read back) every section, draw the figures, write ``report.md`` and
+    ``summary.json`` into ``out``.
+
+    Parameters
+    ----------
+    data : path-like
+        The shared data folder.
+    out : path-like
+        Report folder (``docs/reports/descriptor-meaning`` for the committed one).
+    cache : path-like
+        Descriptor and section cache.
+    quick : bool
+        A small sampler and few bootstrap replicates: minutes, for checking.
+    fresh : bool
+        Recompute the sections' numbers (descriptors are still read from the cache).
+    n_boot : int
+    command : str
+        Written into the report.
+    log : callable
+
+    Returns
+    -------
+    dict
+        The summary written to ``summary.json``.
+    """
+    start = time.perf_counter()
+    out, cache = Path(out), Path(cache)
+    study = Study(Path(data), cache, n_boot=200 if quick else n_boot, log=log)
+    main = PathSampler(**(SAMPLING["34 paths" if quick else "balanced"]["sampler"]))
+    sections_dir = cache / ("sections-quick" if quick else "sections")
+    sections_dir.mkdir(parents=True, exist_ok=True)
+
+    def section(name: str, compute: Callable[[], dict]) -> dict:
+        file = sections_dir / f"{name}.json"
+        if file.exists() and not fresh:
+            return json.loads(file.read_text())
+        t = time.perf_counter()
+        value = compute()
+        value["section_seconds"] = time.perf_counter() - t
+        file.write_text(json.dumps(value, default=float))
+        log(f"section {name}: {value['section_seconds']:.0f} s")
+        return value
+
+    clusters = section("clusters", lambda: clusters_section(study, main))
+    noise = section("noise", lambda: noise_section(study, main))
+    chosen = choose_default(clusters, noise)
+    default = chosen["default"]
+    sampling = section(
+        "sampling",
+        lambda: sampling_section(
+            study, QUICK_SAMPLING if quick else SAMPLING, default, ("voxel", "exact")
+        ),
+    )
+    raw = section("raw", lambda: raw_section(study, main, clusters))
+    hands = section("hands", lambda: hands_section(study, main, default))
+
+    figures = out / "figures"
+    drawn = {
+        "roc": fig.roc_figure(clusters, default, figures / "roc-clusters.png"),
+        "aucs": fig.auc_bars(clusters, figures / "auc-clusters.png", "adjusted contact grasps"),
+        "raw": fig.auc_bars(raw, figures / "auc-raw.png", "raw study records"),
+        "sampling": fig.sampling_figure(sampling, figures / "sampling.png"),
+        "steps": fig.steps_figure(sampling, figures / "steps.png"),
+        "hands": fig.normalisation_figure(hands, figures / "hands.png"),
+    }
+    summary = {
+        "version": __version__,
+        "date": datetime.date.today().isoformat(),
+        "command": command,
+        "quick": quick,
+        "default": chosen,
+        "clusters": clusters,
+        "noise": noise,
+        "sampling": sampling,
+        "raw": raw,
+        "hands": hands,
+        "figures": {k: str(v.relative_to(out)) for k, v in drawn.items()},
+        "seconds": time.perf_counter() - start,
+    }
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "summary.json").write_text(
+        json.dumps(_without_curves(summary), indent=1, default=float)
+    )
+    (out / "report.md").write_text(report_markdown(summary))
+    log(f"wrote {out / 'report.md'}")
+    return summary

@@ -1,0 +1,97 @@
+"""An evaluation's files: ``evaluation.json``, ``evaluation.md`` and ``roc.png``.
+
+May import: `exactgrasp.evaluation.evaluate` (matplotlib loads here, with the Agg backend).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+from exactgrasp.evaluation.evaluate import EvaluationResult
+
+__all__ = ["auc_table", "roc_figure", "write_evaluation"]
+
+
+def roc_figure(result: EvaluationResult, path: Path, names: list[str] | None = None) -> Path:
+    """ROC curves of the chosen evaluations (default: all) in one PNG."""
+    fig, ax = plt.subplots(figsize=(5.5, 5))
+    for name in names or list(result.evaluations):
+        ev = result.evaluations[name]
+        style = "--" if name.startswith("baseline") else "-"
+        ax.plot(*ev.curve, style, label=f"{name}: {ev.auc:.3f}", lw=1.4)
+    ax.plot([0, 1], [0, 1], ":", color="grey", lw=0.8)
+    ax.set_xlabel("false positive rate (different pairs called same)")
+    ax.set_ylabel("true positive rate (same pairs called same)")
+    ax.set_title(f"{len(result.pairs)} pairs, {result.pairs.n_same} same")
+    ax.legend(fontsize=7, loc="lower right")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def _fmt(x: float) -> str:
+    return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.3f}"
+
+
+def auc_table(result: EvaluationResult) -> list[str]:
+    """Markdown rows: distance, AUC, interval, per-group AUCs."""
+    groups = sorted({g for ev in result.evaluations.values() for g in ev.groups})
+    head = "| distance | AUC | interval |" + "".join(f" {g} |" for g in groups)
+    rows = [head, "|---" * (3 + len(groups)) + "|"]
+    for name, ev in result.evaluations.items():
+        cells = [name, _fmt(ev.auc), f"{_fmt(ev.low)} .. {_fmt(ev.high)}"]
+        cells += [_fmt(ev.groups.get(g, {}).get("auc", float("nan"))) for g in groups]
+        rows.append("| " + " | ".join(cells) + " |")
+    return rows
+
+
+def write_evaluation(
+    result: EvaluationResult, out_dir: str | Path, command: str = "", extra: Any = None
+) -> dict[str, Path]:
+    """Write the evaluation's JSON, Markdown and ROC figure into ``out_dir``.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        ``json``, ``markdown``, ``figure``.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    data = result.to_dict()
+    if extra:
+        data["extra"] = extra
+    if command:
+        data["command"] = command
+    json_path = out / "evaluation.json"
+    json_path.write_text(json.dumps(data, indent=1, default=float))
+    figure = roc_figure(result, out / "roc.png")
+    b = result.settings["bootstrap"]
+    lines = [
+        "# Evaluation of descriptor distances on labelled pairs",
+        "",
+        f"{len(result.pairs.names)} grasps, {len(result.pairs)} pairs, "
+        f"{result.pairs.n_same} of them with the highest label ('same').",
+        f"Backend {result.settings['backend']}, sampler {result.settings['sampler']}.",
+        f"AUC: probability that a 'different' pair is farther apart than a 'same' pair "
+        f"(ties 1/2). Interval: {b['level']:.0%} percentile bootstrap, {b['n_boot']} "
+        f"replicates resampling {b['unit']}s, seed {b['seed']}.",
+        "",
+        *auc_table(result),
+        "",
+        "![ROC curves](roc.png)",
+        "",
+    ]
+    if command:
+        lines += [f"Made by `{command}`.", ""]
+    md_path = out / "evaluation.md"
+    md_path.write_text("\n".join(lines))
+    return {"json": json_path, "markdown": md_path, "figure": figure}
