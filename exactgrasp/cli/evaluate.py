@@ -2,9 +2,6 @@
 
 The command-line face of `exactgrasp.evaluation.evaluate`; writes ``evaluation.md``,
 ``evaluation.json`` and ``roc.png`` (`exactgrasp.evaluation.write`).
-
-May import: `exactgrasp.cli.common`, `exactgrasp.cli.params`, `exactgrasp.grasp`,
-`exactgrasp.evaluation`.
 """
 
 from __future__ import annotations

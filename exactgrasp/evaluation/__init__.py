@@ -7,9 +7,6 @@
 ``docs/reports/descriptor-meaning/`` (``python -m exactgrasp.evaluation``): `study` (the
 sections' numbers), `figures`, `text`, `run` and `__main__`. The
 ``exactgrasp evaluate`` command is `exactgrasp.cli.evaluate`.
-
-May import: `exactgrasp.errors` and the `exactgrasp.evaluation` modules; never
-`exactgrasp.cli`.
 """
 
 from exactgrasp.errors import EvaluationError

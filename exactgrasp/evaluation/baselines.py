@@ -13,9 +13,6 @@
   unit, as along the paths.
 - ``"contacts"``: Jaccard distance of the sets of hand links within ``gap`` of the object
   (1 - shared / either); 0 when both touch with the same links.
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry`, `exactgrasp.grasp`,
-`exactgrasp.evaluation.symmetry`.
 """
 
 from __future__ import annotations

@@ -16,9 +16,6 @@ Every distance is the Euclidean norm of the difference of a per-descriptor featu
 A distance "over starting configurations" is the smallest of these norms between one grasp's
 descriptor and the other's descriptors along the paths seen through each symmetry of the hand
 (`exactgrasp.evaluation.symmetry`), taken both ways so that it stays symmetric.
-
-May import: `exactgrasp.errors`, `exactgrasp.backends`, `exactgrasp.descriptor`,
-`exactgrasp.grasp`, `exactgrasp.paths`, `exactgrasp.evaluation.symmetry`.
 """
 
 from __future__ import annotations

@@ -1,9 +1,4 @@
-"""`evaluate`: descriptor distances and baselines against labelled pairs, as AUCs with intervals.
-
-May import: `exactgrasp.errors`, `exactgrasp.backends`, `exactgrasp.descriptor`,
-`exactgrasp.grasp`, `exactgrasp.paths`, `exactgrasp.report.cache` (the descriptor cache) and
-the `exactgrasp.evaluation` modules roc, pairs, distances, symmetry and baselines.
-"""
+"""`evaluate`: descriptor distances and baselines against labelled pairs, as AUCs with intervals."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""The report's figures (matplotlib, Agg): one function per PNG, each returning its path.
-
-May import: nothing of exactgrasp (it draws the JSON-ready section dicts of
-`exactgrasp.evaluation.study`).
-"""
+"""The report's figures (matplotlib, Agg): one function per PNG, each returning its path."""
 
 from __future__ import annotations
 

@@ -6,8 +6,6 @@ with a manifest (`exactgrasp.batch.read_manifest`), its ids. ``label`` is ``same
 ``different`` (also ``1`` / ``0``, ``true`` / ``false``, ``yes`` / ``no``) or a number, a grade
 where higher means more alike. ``group`` names the group of the pair for the per-group
 breakdown (e.g. the object).
-
-May import: `exactgrasp.errors`, `exactgrasp.batch`.
 """
 
 from __future__ import annotations

@@ -9,8 +9,6 @@ The bootstrap resamples the *grasps* (or their groups), not the pairs: pairs tha
 grasp are not independent, so resampling pairs would make the interval too narrow. A
 replicate draws the grasps with replacement; a pair then counts as often as the product of
 its two grasps' draws (pairs of a grasp with itself never exist).
-
-May import: `exactgrasp.errors`.
 """
 
 from __future__ import annotations

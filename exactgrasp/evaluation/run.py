@@ -3,9 +3,6 @@
 ``python -m exactgrasp.evaluation`` runs `build_report`. Each section's numbers are kept in
 ``CACHE/sections/NAME.json`` (with the descriptors in ``CACHE/descriptors``), so a second run
 only redraws and rewrites; ``--fresh`` recomputes the sections (descriptors stay cached).
-
-May import: `exactgrasp.paths`, `exactgrasp.version` and the `exactgrasp.evaluation` modules
-study, figures and write.
 """
 
 from __future__ import annotations

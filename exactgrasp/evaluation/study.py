@@ -8,10 +8,6 @@ result, draws the figures and writes the report. Grasps: the 34 cereal-box conta
 their raw study records with the authors' clusters, the noise test's grasps and copies of
 `exactgrasp.report`, and the same cereal-box placements grasped by the built-in parallel
 gripper, closed with `close_fingers`.
-
-May import: `exactgrasp.errors`, `exactgrasp.backends`, `exactgrasp.grasp`, `exactgrasp.hands`,
-`exactgrasp.paths`, `exactgrasp.report` (cache, config, data, noise, run) and the
-`exactgrasp.evaluation` modules below it.
 """
 
 from __future__ import annotations

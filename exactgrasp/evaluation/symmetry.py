@@ -15,8 +15,6 @@ and take the minimum distance". Two kinds of symmetry could matter:
   exactly from the original grasp with `symmetric_poses`, without building a mirrored hand or
   object, and with no nearest-path re-mapping (the phyllotaxis paths are not closed under a
   mirror, so re-mapping path indices would only be approximate).
-
-May import: `exactgrasp.errors`, `exactgrasp.geometry`, `exactgrasp.hands`.
 """
 
 from __future__ import annotations

@@ -2,9 +2,6 @@
 
 Every number in the text is read from the summary, so the words and the figures cannot drift
 apart; the judgements ("within the interval", "reaches 0.90") are computed here too.
-
-May import: nothing of exactgrasp (it formats the summary dict of
-`exactgrasp.evaluation.run.build_report`).
 """
 
 from __future__ import annotations

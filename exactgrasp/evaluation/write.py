@@ -1,7 +1,4 @@
-"""An evaluation's files: ``evaluation.json``, ``evaluation.md`` and ``roc.png``.
-
-May import: `exactgrasp.evaluation.evaluate` (matplotlib loads here, with the Agg backend).
-"""
+"""An evaluation's files: ``evaluation.json``, ``evaluation.md`` and ``roc.png``."""
 
 from __future__ import annotations
 
