@@ -1,4 +1,4 @@
-"""`evaluate`: descriptor distances and baselines against labelled pairs, as AUCs with intervals."""
+"""`evaluate`: descriptor distances and baselines against labelled pairs, as AUCs with CIs."""
 
 from __future__ import annotations
 
