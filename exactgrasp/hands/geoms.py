@@ -13,7 +13,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from exactgrasp.cache import DiskCache
+from exactgrasp.cache import DiskCache, sources_digest
 from exactgrasp.errors import Fix, MeshError, ModelError, warn_caller
 from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
@@ -59,8 +59,11 @@ GEOM_KIND.update({5: "cylinder", 6: "box", 7: "mesh", 8: "sdf"})
 JOINT_FREE, JOINT_BALL, JOINT_SLIDE, JOINT_HINGE = range(4)
 
 
-#: Welded, resolved link meshes on disk, keyed on the arrays MuJoCo read from the mesh file.
-WELDED = DiskCache("solids", version=__version__)
+#: Welded, resolved link meshes on disk, keyed on the arrays MuJoCo read from the mesh file and
+#: on the source of the code that welds and resolves them.
+WELDED = DiskCache(
+    "solids", version=lambda: __version__ + sources_digest("geometry", "hands/geoms.py")
+)
 
 
 def weld_mesh(
@@ -153,7 +156,7 @@ def _weld(V, F, what, repairs, resolved):
     defects = edge_defects(V, F)
     if not defects.is_cycle:
         if repairs is not None:
-            return repair_mesh(V, F, what, repairs)
+            return repair_mesh(V, F, what, repairs, resolved)
         raise ModelError(
             f"{what} is not a closed surface, even after merging duplicate vertices "
             f"({defects.describe()}); ",
@@ -181,7 +184,11 @@ def _weld(V, F, what, repairs, resolved):
 
 
 def repair_mesh(
-    V: np.ndarray, F: np.ndarray, what: str, repairs: list[str]
+    V: np.ndarray,
+    F: np.ndarray,
+    what: str,
+    repairs: list[str],
+    resolved: list[str] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Close an open mesh geom as ``Solid(repair=True)`` does; say what changed in ``repairs``.
 
@@ -195,6 +202,9 @@ def repair_mesh(
         The geom, for messages.
     repairs : list of str
         One line is appended: the repairs done and the volume before and after (m^3).
+    resolved : list of str, optional
+        What resolving the repaired mesh into its solid changed, appended here (for one
+        warning per model); None: warned about at once.
 
     Returns
     -------
@@ -209,7 +219,7 @@ def repair_mesh(
             raise ModelError(*exc.parts, " (with ", Fix("repair", True), ")") from exc
     for w in caught:  # the repair itself is reported once, below; shell notes pass on
         if not str(w.message).startswith(f"{what}: repaired"):
-            warn_caller(str(w.message))
+            (warn_caller if resolved is None else resolved.append)(str(w.message))
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     before = float(np.einsum("ij,ij->", a, np.cross(b, c))) / 6.0
     actions = list((solid.repair_report or {}).get("actions", []))
@@ -355,7 +365,7 @@ def collect_geoms(
             geoms.append((name, g, V, F))
     if resolved:
         warn_caller(
-            f"{source}: resolved {len(resolved)} mesh geom(s) into the solids they bound: "
+            f"{source}: resolved mesh geoms into the solids they bound: "
             + " | ".join(line.removeprefix(f"{source}: ") for line in resolved)
         )
     if repairs:
