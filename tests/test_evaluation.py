@@ -473,3 +473,10 @@ def test_the_recommended_distance_is_a_descriptor_distance_kind():
     assert eg.distance(a, b, "cbrt") == pytest.approx(
         np.linalg.norm(np.cbrt(a.values) - np.cbrt(b.values))
     )
+
+
+def test_the_names_listed_without_the_code_are_the_code_s():
+    from exactgrasp.evaluation import names, symmetry
+
+    assert tuple(symmetry.SYMMETRIES) == names.SYMMETRY_NAMES
+    assert set(names.DEFAULT_DISTANCES) <= set(names.DISTANCES)

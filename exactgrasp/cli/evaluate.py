@@ -10,7 +10,7 @@ import argparse
 import shlex
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from exactgrasp.cli.common import (
     add_backend,
@@ -20,19 +20,23 @@ from exactgrasp.cli.common import (
     sampler_from_args,
 )
 from exactgrasp.cli.params import add_param, split_params
-from exactgrasp.evaluation.baselines import BASELINES
-from exactgrasp.evaluation.distances import DISTANCES
-from exactgrasp.evaluation.evaluate import DEFAULT_DISTANCES, evaluate
-from exactgrasp.evaluation.pairs import read_pairs
-from exactgrasp.evaluation.roc import BOOTSTRAP_UNITS
-from exactgrasp.evaluation.symmetry import SYMMETRIES
-from exactgrasp.evaluation.write import write_evaluation
-from exactgrasp.grasp import Grasp
+from exactgrasp.evaluation.names import (
+    BASELINES,
+    BOOTSTRAP_UNITS,
+    DEFAULT_DISTANCES,
+    DISTANCES,
+    SYMMETRY_NAMES,
+)
+
+if TYPE_CHECKING:
+    from exactgrasp.grasp import Grasp
 
 __all__ = ["add_parser", "cmd_evaluate"]
 
 
 def _grasps(args: argparse.Namespace, sources: list) -> list[Grasp]:
+    from exactgrasp.grasp import Grasp
+
     base = Path(args.manifest).resolve().parent if args.manifest else Path(args.pairs).parent
     grasps = []
     for source in sources:
@@ -46,6 +50,10 @@ def _grasps(args: argparse.Namespace, sources: list) -> list[Grasp]:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     """Handler of ``exactgrasp evaluate``; prints the AUC table, returns 0."""
+    from exactgrasp.evaluation.evaluate import evaluate
+    from exactgrasp.evaluation.pairs import read_pairs
+    from exactgrasp.evaluation.write import write_evaluation
+
     pairs, sources = read_pairs(args.pairs, args.manifest)
     sampler = sampler_from_args(args)
     params = split_params(args.param, [args.backend])[args.backend]
@@ -103,7 +111,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--symmetry",
         help="hand symmetries to minimise over, comma-separated: "
-        f"{', '.join(SYMMETRIES)} (the Barrett: mirror-x)",
+        f"{', '.join(SYMMETRY_NAMES)} (the Barrett: mirror-x)",
     )
     parser.add_argument("--cache", help="folder of cached descriptors (default: none)")
     parser.add_argument("--n-boot", type=int, default=2000, help="bootstrap replicates")

@@ -9,19 +9,43 @@ sections' numbers), `figures`, `text`, `run` and `__main__`. The
 ``exactgrasp evaluate`` command is `exactgrasp.cli.evaluate`.
 """
 
+from typing import TYPE_CHECKING
+
 from exactgrasp.errors import EvaluationError
-from exactgrasp.evaluation.baselines import BASELINES, baseline_matrix
-from exactgrasp.evaluation.distances import DISTANCES, distance_matrix, escape_times
-from exactgrasp.evaluation.evaluate import (
-    DEFAULT_DISTANCES,
-    Evaluation,
-    EvaluationResult,
-    evaluate,
-    evaluate_matrix,
+from exactgrasp.evaluation.names import BASELINES, DEFAULT_DISTANCES, DISTANCES
+from exactgrasp.lazy import lazy_names
+
+if TYPE_CHECKING:
+    from exactgrasp.evaluation.baselines import baseline_matrix
+    from exactgrasp.evaluation.distances import distance_matrix, escape_times
+    from exactgrasp.evaluation.evaluate import (
+        Evaluation,
+        EvaluationResult,
+        evaluate,
+        evaluate_matrix,
+    )
+    from exactgrasp.evaluation.pairs import LabelledPairs, pairs_from_groups, read_pairs
+    from exactgrasp.evaluation.roc import auc, bootstrap_auc, roc_curve
+    from exactgrasp.evaluation.symmetry import SYMMETRIES, object_symmetries
+
+# The code behind the names loads on first use: ``exactgrasp evaluate --help`` lists the names
+# without numpy's and scipy's share of the work.
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    {
+        "exactgrasp.evaluation.baselines": ("baseline_matrix",),
+        "exactgrasp.evaluation.distances": ("distance_matrix", "escape_times"),
+        "exactgrasp.evaluation.evaluate": (
+            "Evaluation",
+            "EvaluationResult",
+            "evaluate",
+            "evaluate_matrix",
+        ),
+        "exactgrasp.evaluation.pairs": ("LabelledPairs", "pairs_from_groups", "read_pairs"),
+        "exactgrasp.evaluation.roc": ("auc", "bootstrap_auc", "roc_curve"),
+        "exactgrasp.evaluation.symmetry": ("SYMMETRIES", "object_symmetries"),
+    },
 )
-from exactgrasp.evaluation.pairs import LabelledPairs, pairs_from_groups, read_pairs
-from exactgrasp.evaluation.roc import auc, bootstrap_auc, roc_curve
-from exactgrasp.evaluation.symmetry import SYMMETRIES, object_symmetries
 
 __all__ = [
     "BASELINES",

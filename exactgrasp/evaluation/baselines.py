@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial.distance import cdist
 
 from exactgrasp.errors import EvaluationError
+from exactgrasp.evaluation.names import BASELINES
 from exactgrasp.evaluation.symmetry import object_symmetries
 from exactgrasp.geometry.bvh import DEFAULT_ENGINE, build_bvh, distance
 from exactgrasp.grasp import Grasp
@@ -37,7 +38,6 @@ __all__ = [
 ]
 
 #: The baselines by name.
-BASELINES = ("joints", "position", "origin", "pose", "contacts")
 #: A link closer than this (m) to the object touches it.
 CONTACT_GAP = 1e-3
 

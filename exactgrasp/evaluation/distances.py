@@ -28,6 +28,7 @@ from scipy.spatial.distance import cdist
 from exactgrasp.backends import Backend
 from exactgrasp.descriptor import Descriptor, compute_volumes
 from exactgrasp.errors import EvaluationError
+from exactgrasp.evaluation.names import DISTANCES
 from exactgrasp.evaluation.symmetry import symmetric_poses
 from exactgrasp.grasp import Grasp
 from exactgrasp.paths.sampler import PathSampler
@@ -44,7 +45,6 @@ __all__ = [
 ]
 
 #: The descriptor distances by name.
-DISTANCES = ("l2", "l2_diff", "cbrt", "escape")
 #: The distance the report "What the descriptor tells you" chooses by its rule
 #: (`exactgrasp.evaluation.study.choose_default`); also ``exactgrasp.distance(a, b, "cbrt")``.
 RECOMMENDED_DISTANCE = "cbrt"

@@ -16,6 +16,7 @@ from exactgrasp.descriptor import Descriptor, compute_descriptor
 from exactgrasp.errors import EvaluationError
 from exactgrasp.evaluation.baselines import BASELINES, baseline_matrix
 from exactgrasp.evaluation.distances import configuration_values, distance_matrix
+from exactgrasp.evaluation.names import DEFAULT_DISTANCES
 from exactgrasp.evaluation.pairs import LabelledPairs
 from exactgrasp.evaluation.roc import bootstrap_auc, roc_curve, weighted_auc
 from exactgrasp.evaluation.symmetry import as_symmetries
@@ -26,7 +27,6 @@ from exactgrasp.report.cache import DescriptorCache
 __all__ = ["DEFAULT_DISTANCES", "Evaluation", "EvaluationResult", "evaluate", "evaluate_matrix"]
 
 #: The descriptor distances `evaluate` reports unless told otherwise.
-DEFAULT_DISTANCES = ("l2", "l2_diff", "cbrt", "escape")
 
 
 @dataclass

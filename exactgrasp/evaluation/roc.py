@@ -18,11 +18,11 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.errors import EvaluationError
+from exactgrasp.evaluation.names import BOOTSTRAP_UNITS
 
 __all__ = ["BOOTSTRAP_UNITS", "auc", "bootstrap_auc", "roc_curve", "weighted_auc"]
 
 #: What a bootstrap replicate resamples.
-BOOTSTRAP_UNITS = ("grasp", "group", "pair")
 
 
 def weighted_auc(
