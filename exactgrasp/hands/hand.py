@@ -5,8 +5,8 @@ mujoco, see `exactgrasp.hands.model`) at one joint configuration, with its `Hand
 is the volume of the UNION of its links: real link meshes overlap and an overlap is hand once.
 `HandModel` is what a Hand needs of its model.
 
-Imports `exactgrasp.errors`, `exactgrasp.geometry` (manifold, solid) and `exactgrasp.hands`
-frame, loading and noise.
+Imports `exactgrasp.errors`, `exactgrasp.geometry` (solid) and `exactgrasp.hands`
+frame, loading, noise and prepared.
 """
 
 from __future__ import annotations
@@ -22,11 +22,11 @@ import numpy as np
 import trimesh
 
 from exactgrasp.errors import FrameError, JointError, MeshError
-from exactgrasp.geometry.manifold import union_volume
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.loading import jsonable, load_model_cached
 from exactgrasp.hands.noise import joint_noise
+from exactgrasp.hands.prepared import union_volume_of_links
 
 __all__ = ["Hand", "HandModel", "RigidModel"]
 
@@ -335,8 +335,12 @@ class Hand:
 
     @cached_property
     def volume(self) -> float:
-        """Volume of the union of the posed links, m^3."""
-        return union_volume(self.link_arrays(), name=self.model.name)
+        """Volume of the union of the posed links, m^3.
+
+        Summed from the links' volumes and their overlaps, with each link's solid prepared
+        once per process (`exactgrasp.hands.prepared`); a single link is its own volume.
+        """
+        return union_volume_of_links(self)
 
     @cached_property
     def geometry_hash(self) -> str:
