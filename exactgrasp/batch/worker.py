@@ -4,8 +4,9 @@
 executes on a worker process (`compute_rows`) or in this process (`open_pool`, the pools).
 
 May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.paths`, `exactgrasp.grasp`,
-`exactgrasp.backends`, `exactgrasp.descriptor`, `exactgrasp.diagnostics`,
-`exactgrasp.batch.manifest` (distributed only through `require`).
+`exactgrasp.backends`, `exactgrasp.descriptor`, `exactgrasp.diagnostics`, `exactgrasp.hands`
+(its counter of prepared links), `exactgrasp.batch.manifest` and `exactgrasp.batch.threads`
+(distributed only through `require`).
 """
 
 from __future__ import annotations
@@ -26,25 +27,22 @@ from exactgrasp.backends import Backend
 from exactgrasp.backends.base import thread_limit
 from exactgrasp.backends.registry import shared_backend
 from exactgrasp.batch.manifest import ManifestRow
+from exactgrasp.batch.threads import THREAD_ENV, limit_threads
 from exactgrasp.descriptor import compute_descriptor
 from exactgrasp.diagnostics import ignores_third_party_warnings
 from exactgrasp.errors import BatchError, require
 from exactgrasp.grasp import Grasp
+from exactgrasp.hands.prepared import LINK_SOLIDS
 from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.version import __version__
 
-__all__ = ["THREAD_ENV", "compute_rows", "default_workers", "open_pool"]
+__all__ = ["THREAD_ENV", "WORKER_CONFIG", "compute_rows", "default_workers", "open_pool"]
 
 log = logging.getLogger("exactgrasp.batch")
 
-#: Set in local worker processes before they start: one process per core already fills the
-#: machine, so numba, OpenMP and BLAS thread pools inside a worker would only oversubscribe it.
-THREAD_ENV = {
-    "NUMBA_NUM_THREADS": "1",
-    "OMP_NUM_THREADS": "1",
-    "MKL_NUM_THREADS": "1",
-    "OPENBLAS_NUM_THREADS": "1",
-}
+#: Dask settings of the local cluster's workers. The statistical profiler samples every
+#: thread's stack every 10 ms: off, a row costs in a worker what it costs in this process.
+WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
 
 
 # -- on the workers -----------------------------------------------------------------------------
@@ -98,17 +96,23 @@ def compute_rows(
         The exactgrasp version and backend parameters of the run; rows fail when this worker's
         differ.
     single_thread : bool
-        Run backends given ``n_jobs=None`` on one thread (a worker per
-        core already fills the machine); False leaves them every core.
+        Compute each row on one thread, numba, BLAS and manifold3d included
+        (`exactgrasp.batch.threads`): a worker has one thread per core it may use. False
+        leaves backends given ``n_jobs=None`` every core.
 
     Returns
     -------
     dict
         ``results``: one dict per row (``id``, ``row``, ``values`` shape (n_paths * n_steps,)
-        or None, ``metadata`` JSON text or None, ``error``, ``message``); ``seconds``;
-        ``worker``.
+        or None, ``metadata`` JSON text or None, ``error``, ``message``); ``seconds`` and
+        ``cpu_seconds`` (this process's, every thread); ``worker``; ``links_prepared``: hand
+        links this call made solids of (`exactgrasp.hands.prepared`; 0 when every hand was
+        seen before in this process).
     """
+    if single_thread:
+        limit_threads()
     start, cpu_start = time.perf_counter(), time.process_time()
+    builds = LINK_SOLIDS.builds
     sampler = PathSampler.from_params(sampler_params)
     engine = _worker_backend(backend)
     mismatch = None
@@ -142,6 +146,7 @@ def compute_rows(
         "seconds": time.perf_counter() - start,
         "cpu_seconds": time.process_time() - cpu_start,
         "worker": f"{socket.gethostname()}:{os.getpid()}",
+        "links_prepared": LINK_SOLIDS.builds - builds,
     }
 
 
@@ -217,21 +222,24 @@ def open_pool(workers: int | None, scheduler: str | None) -> Iterator[Any]:
         yield _SerialPool()
         return
     require("distributed", "exactgrasp batch", "distributed", "batch")
+    import dask
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
         with Client(scheduler) as client:
             yield _DaskPool(client)
         return
-    cluster = LocalCluster(
-        n_workers=workers,
-        threads_per_worker=1,
-        processes=True,
-        # Any free port: a fixed one (8787) clashes with other clusters on the machine.
-        dashboard_address=":0",
-        silence_logs=logging.ERROR,
-        env=THREAD_ENV,
-    )
+    # The nannies hand this process's dask settings to the worker processes they start.
+    with dask.config.set(WORKER_CONFIG):
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            # Any free port: a fixed one (8787) clashes with other clusters on the machine.
+            dashboard_address=":0",
+            silence_logs=logging.ERROR,
+            env=THREAD_ENV,
+        )
     with cluster, Client(cluster) as client:
         yield _DaskPool(client)
 
