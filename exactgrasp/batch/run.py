@@ -343,7 +343,13 @@ def _compute(pool, todo: dict, task: tuple, out: Path, n_values, n_rows, skipped
                     collected[part][result["row"]] = result
                 if outcome:
                     line = {"part": part, "first_row": rows[0].index, "rows": len(rows)}
-                    keys = ("seconds", "cpu_seconds", "worker", "links_prepared")
+                    keys = (
+                        "seconds",
+                        "cpu_seconds",
+                        "thread_cpu_seconds",
+                        "worker",
+                        "links_prepared",
+                    )
                     line.update((key, outcome.get(key)) for key in keys)
                     timings.write(json.dumps(line) + "\n")
                     timings.flush()

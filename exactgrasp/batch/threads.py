@@ -10,10 +10,10 @@ every library that keeps a thread pool of its own must then use one thread per t
   (`THREAD_ENV`, given to the local cluster's workers; see ``docs/batch.md`` for ``dask
   worker``);
 * manifold3d (the hand's and the object's booleans): TBB built into the wheel, which reads no
-  environment variable; it sizes its pool from the CPUs the calling thread may use at its
-  first parallel call and keeps that size. `limit_threads` narrows the thread's CPUs to one
-  for that call and restores them, so TBB starts no helper threads and every boolean runs on
-  the thread that asked for it, on any CPU the OS picks;
+  environment variable; it sizes its pool from the CPUs the process's main thread may use at
+  its first parallel call and keeps that size. `limit_threads` narrows the CPUs of that thread
+  and of the calling one to one CPU for that call and restores them, so TBB starts no helper
+  threads and every boolean runs on the thread that asked for it, on any CPU the OS picks;
 * coal (the exact backend's broad phase): no threads of its own (its library links neither
   OpenMP nor TBB).
 
@@ -67,10 +67,16 @@ def limit_threads() -> bool:
             os.environ.setdefault(name, value)
         if not hasattr(os, "sched_setaffinity"):
             return False
-        cpus = os.sched_getaffinity(0)
+        # TBB reads the CPUs of the process's main thread (its id is the process's), and a
+        # dask worker calls from a thread of its own: narrow both for the call.
+        threads = sorted({0, os.getpid()})
+        saved = [(thread, os.sched_getaffinity(thread)) for thread in threads]
+        one = {min(saved[0][1])}
         try:
-            os.sched_setaffinity(0, {min(cpus)})
+            for thread, _ in saved:
+                os.sched_setaffinity(thread, one)
             start_thread_pool()
         finally:
-            os.sched_setaffinity(0, cpus)
+            for thread, cpus in saved:
+                os.sched_setaffinity(thread, cpus)
         return True

@@ -104,14 +104,16 @@ def compute_rows(
     -------
     dict
         ``results``: one dict per row (``id``, ``row``, ``values`` shape (n_paths * n_steps,)
-        or None, ``metadata`` JSON text or None, ``error``, ``message``); ``seconds`` and
-        ``cpu_seconds`` (this process's, every thread); ``worker``; ``links_prepared``: hand
+        or None, ``metadata`` JSON text or None, ``error``, ``message``); ``seconds``,
+        ``cpu_seconds`` (this process's, every thread) and ``thread_cpu_seconds`` (the
+        calling thread's: their ratio is the threads' worth of CPU the rows used, whatever
+        the machine's load); ``worker``; ``links_prepared``: hand
         links this call made solids of (`exactgrasp.hands.prepared`; 0 when every hand was
         seen before in this process).
     """
     if single_thread:
         limit_threads()
-    start, cpu_start = time.perf_counter(), time.process_time()
+    start, cpu_start, thread_start = time.perf_counter(), time.process_time(), time.thread_time()
     builds = LINK_SOLIDS.builds
     sampler = PathSampler.from_params(sampler_params)
     engine = _worker_backend(backend)
@@ -145,6 +147,7 @@ def compute_rows(
         "results": results,
         "seconds": time.perf_counter() - start,
         "cpu_seconds": time.process_time() - cpu_start,
+        "thread_cpu_seconds": time.thread_time() - thread_start,
         "worker": f"{socket.gethostname()}:{os.getpid()}",
         "links_prepared": LINK_SOLIDS.builds - builds,
     }

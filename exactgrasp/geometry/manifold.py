@@ -175,9 +175,9 @@ def start_thread_pool() -> None:
     """Run one boolean large enough for manifold3d to start its thread pool.
 
     manifold3d (3.x wheels) has TBB built in, with no setting for its threads: TBB sizes its
-    pool once per process, from the CPUs the calling thread may run on at its first parallel
-    call. `exactgrasp.batch.threads.limit_threads` narrows those CPUs around this call, so a
-    batch worker's booleans use exactly its share of the cores.
+    pool once per process, from the CPUs the process's main thread may run on at its first
+    parallel call. `exactgrasp.batch.threads.limit_threads` narrows those CPUs around this
+    call, so that a batch worker's booleans use exactly its share of the cores.
     """
     sphere = manifold3d.Manifold.sphere(1.0, 256)
     float((sphere + sphere.translate((0.5, 0.0, 0.0))).volume())
