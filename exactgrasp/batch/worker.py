@@ -194,11 +194,15 @@ class _DaskPool:
         self._futures = as_completed()
         self._chunks: dict[str, tuple] = {}
         self._token = uuid.uuid4().hex[:8]
+        self._submitted = 0
 
     def submit(self, chunk: tuple, args: tuple) -> None:
         part, rows = chunk
-        suffix = f"-row{rows[0].index}" if len(rows) == 1 else ""
-        key = f"exactgrasp-batch-{self._token}-part{part}{suffix}"
+        # Unique per submission: a part has several tasks, and a failed task comes back as
+        # single rows.
+        self._submitted += 1
+        first, last = rows[0].index, rows[-1].index
+        key = f"exactgrasp-batch-{self._token}-{self._submitted}-part{part}-rows{first}-{last}"
         future = self.client.submit(compute_rows, *args, key=key, pure=False, retries=0)
         self._chunks[future.key] = chunk
         self._futures.add(future)
