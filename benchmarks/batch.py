@@ -17,7 +17,9 @@ backend: the speed-up (2 workers over 1, median over repeats), the parallel effi
 
 ``row-cost``: one local worker with one row per task, against `compute_rows` on one thread in
 a fresh process of its own (spawned, as the worker is), on the same rows; the first row of
-each (compiling, loading, preparing the hand) is left out. Median ratio over the rows.
+each (compiling, loading, preparing the hand) is left out. Median ratio over the rows, of the
+wall seconds and of the computing thread's CPU seconds (which the machine's load inflates
+much less).
 
 The machine may be shared: compare figures only within one run of this script, and read the
 load averages printed beside them.
@@ -137,7 +139,7 @@ def _in_process(manifest: str, backend: str, queue) -> None:
     seconds = []
     for row in m.rows:
         outcome = compute_rows([row], str(m.base_dir), (backend, {}), sampler)
-        seconds.append(outcome["seconds"])
+        seconds.append((outcome["seconds"], outcome["thread_cpu_seconds"]))
     queue.put(seconds)
 
 
@@ -146,7 +148,7 @@ def row_cost(args, manifest: Path, folder: Path) -> dict:
     spawn = multiprocessing.get_context("spawn")
     for backend in args.backends.split(","):
         _warm(manifest, backend)
-        ratios, pairs = [], []
+        ratios, cpu_ratios, pairs = [], [], []
         for repeat in range(args.repeat):
             queue = spawn.Queue()
             proc = spawn.Process(target=_in_process, args=(str(manifest), backend, queue))
@@ -155,19 +157,28 @@ def row_cost(args, manifest: Path, folder: Path) -> dict:
             proc.join()
             out = folder / f"rowcost-{backend}-{repeat}"
             run_batch(manifest, out, backend=backend, workers=1, part_size=1, progress=False)
-            worker = [t["seconds"] for t in sorted(_timings(out), key=lambda t: t["first_row"])]
+            tasks = sorted(_timings(out), key=lambda t: t["first_row"])
+            worker = [(t["seconds"], t["thread_cpu_seconds"]) for t in tasks]
             pairs.append({"in_process_s": here, "in_worker_s": worker})
-            ratio = [w / h for w, h in zip(worker[1:], here[1:], strict=True)]
+            ratio = [w[0] / h[0] for w, h in zip(worker[1:], here[1:], strict=True)]
+            cpu = [w[1] / h[1] for w, h in zip(worker[1:], here[1:], strict=True)]
             ratios.extend(ratio)
+            cpu_ratios.extend(cpu)
             print(
-                f"{backend} repeat {repeat}: rows in a worker / in this process: "
-                f"{', '.join(f'{r:.2f}' for r in ratio)}; sum {sum(worker[1:]):.2f} s / "
-                f"{sum(here[1:]):.2f} s; load {os.getloadavg()[0]:.1f}",
+                f"{backend} repeat {repeat}: a row in a worker / in this process, wall: "
+                f"{', '.join(f'{r:.2f}' for r in ratio)}; CPU of the computing thread: "
+                f"{', '.join(f'{r:.2f}' for r in cpu)}; sums {sum(w[0] for w in worker[1:]):.2f}"
+                f" s / {sum(h[0] for h in here[1:]):.2f} s; load {os.getloadavg()[0]:.1f}",
                 flush=True,
             )
-        median = statistics.median(ratios)
-        print(f"{backend}: median row in a worker / in process: x{median:.3f}", flush=True)
-        figures[backend] = {"median_ratio": median, "runs": pairs}
+        median, median_cpu = statistics.median(ratios), statistics.median(cpu_ratios)
+        print(
+            f"{backend}: median row in a worker / in process: wall x{median:.3f}, "
+            f"CPU x{median_cpu:.3f}",
+            flush=True,
+        )
+        figures[backend] = {"median_ratio": median, "median_cpu_ratio": median_cpu}
+        figures[backend]["runs"] = pairs
     return figures
 
 

@@ -28,8 +28,8 @@ N_ROWS = 12
 
 
 def _dask(*args: str, env: dict | None = None, log: Path) -> subprocess.Popen:
-    # `python -m dask` is the `dask` command of this interpreter's environment; a session of
-    # its own, so that killing it takes its children (a worker's nanny and process) along.
+    # `python -m dask` is the `dask` command of this interpreter's environment; a process
+    # group of its own, so that killing it takes its children (a worker's nanny and process).
     return subprocess.Popen(
         [sys.executable, "-m", "dask", *args],
         env={**os.environ, **(env or {})},

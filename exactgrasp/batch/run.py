@@ -74,7 +74,8 @@ class BatchSummary:
     seconds : float
         Wall time of this run, cluster start included (s).
     compute_seconds : float
-        Wall time from the first task submitted to the last part written (s).
+        Wall time from the first task submitted to the last part written (s), the workers
+        started and warmed up (`exactgrasp.batch.worker.warm_up`) before it.
     workers : int
         Worker processes (threads on an existing cluster); 0 when run in this process.
     """
@@ -238,6 +239,7 @@ def run_batch(
             if workers is None and scheduler is None:
                 workers = default_workers()
             with open_pool(workers, scheduler) as pool:
+                pool.warm(spec)
                 n_workers, compute_start = pool.workers, time.perf_counter()
                 expected = [params["exactgrasp_version"], params["backend_params"]]
                 task = (str(manifest.base_dir), spec, sampler.params, overrides, expected)

@@ -1,11 +1,13 @@
 """The worker side of a batch run: computing rows, and the pools that run parts.
 
 `exactgrasp.batch.run` keeps the run logic (parts, resume, files); this module holds what
-executes on a worker process (`compute_rows`) or in this process (`open_pool`, the pools).
+executes on a worker process (`compute_rows`, `warm_up`) or in this process (`open_pool`, the
+pools).
 
 May import: `exactgrasp.errors`, `exactgrasp.version`, `exactgrasp.paths`, `exactgrasp.grasp`,
-`exactgrasp.backends`, `exactgrasp.descriptor`, `exactgrasp.diagnostics`, `exactgrasp.hands`
-(its counter of prepared links), `exactgrasp.batch.manifest` and `exactgrasp.batch.threads`
+`exactgrasp.backends`, `exactgrasp.descriptor`, `exactgrasp.diagnostics`,
+`exactgrasp.geometry` (a box, for `warm_up`), `exactgrasp.hands` (a hand from a mesh; the
+counter of prepared links), `exactgrasp.batch.manifest` and `exactgrasp.batch.threads`
 (distributed only through `require`).
 """
 
@@ -23,6 +25,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from exactgrasp.backends import Backend
 from exactgrasp.backends.base import thread_limit
 from exactgrasp.backends.registry import shared_backend
@@ -31,12 +35,22 @@ from exactgrasp.batch.threads import THREAD_ENV, limit_threads
 from exactgrasp.descriptor import compute_descriptor
 from exactgrasp.diagnostics import ignores_third_party_warnings
 from exactgrasp.errors import BatchError, require
+from exactgrasp.geometry.objects import box
 from exactgrasp.grasp import Grasp
+from exactgrasp.hands.frame import HandFrame
+from exactgrasp.hands.hand import Hand
 from exactgrasp.hands.prepared import LINK_SOLIDS
 from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.version import __version__
 
-__all__ = ["THREAD_ENV", "WORKER_CONFIG", "compute_rows", "default_workers", "open_pool"]
+__all__ = [
+    "THREAD_ENV",
+    "WORKER_CONFIG",
+    "compute_rows",
+    "default_workers",
+    "open_pool",
+    "warm_up",
+]
 
 log = logging.getLogger("exactgrasp.batch")
 
@@ -153,6 +167,34 @@ def compute_rows(
     }
 
 
+def warm_up(backend: Backend | tuple[str, dict]) -> str:
+    """Ready this worker process before any row: threads limited (`limit_threads`), the
+    backend built, its compiled kernels loaded from numba's cache.
+
+    The kernels load by computing one pose of a small made-up grasp (a box hand, a box
+    object), whose hand is no dataset's: the hands the rows use are still prepared, and
+    counted, by the rows.
+
+    Parameters
+    ----------
+    backend : Backend or (str, dict)
+
+    Returns
+    -------
+    str
+        This worker, ``host:pid``.
+    """
+    limit_threads()
+    engine = _worker_backend(backend)
+    hand = Hand.from_meshes([box((0.1, 0.1, 0.04))], frame=HandFrame.identity())
+    pose = np.eye(4)
+    pose[2, 3] = 0.03
+    grasp = Grasp(hand, box((0.03, 0.03, 0.03)), pose, name="warm-up")
+    with thread_limit(1):
+        compute_descriptor(grasp, PathSampler(1, 1, 1, n_steps=1), engine, progress=False)
+    return f"{socket.gethostname()}:{os.getpid()}"
+
+
 # -- pools: in this process, or on dask.distributed --------------------------------------------
 
 
@@ -164,6 +206,9 @@ class _SerialPool:
 
     def __init__(self):
         self._queue: deque = deque()
+
+    def warm(self, backend: Backend | tuple[str, dict]) -> None:
+        """Nothing to ready: the rows run here."""
 
     def submit(self, chunk: tuple, args: tuple) -> None:
         self._queue.append((chunk, args))
@@ -210,6 +255,23 @@ class _DaskPool:
     @property
     def in_flight(self) -> int:
         return len(self._chunks)
+
+    def warm(self, backend: Backend | tuple[str, dict]) -> None:
+        """`warm_up` on every worker there now, all at once, before any row is handed out:
+        a worker still importing would otherwise sit on the tasks given to it."""
+        workers = list(self.client.scheduler_info()["workers"])
+        futures = [
+            self.client.submit(
+                warm_up, backend, key=f"exactgrasp-warm-{self._token}-{n}", pure=False,
+                workers=[address], allow_other_workers=False,
+            )
+            for n, address in enumerate(workers)
+        ]  # fmt: skip
+        for future in futures:
+            try:
+                future.result()
+            except Exception as exc:  # the rows will say what is wrong, row by row
+                log.warning("warming a worker up failed: %s", exc)
 
     def completed(self):
         for future in self._futures:
