@@ -180,7 +180,8 @@ def run_batch(
     progress : bool, optional
         Progress bar; default only on a terminal.
     part_size : int
-        Manifest rows per part (the unit of work and of resuming).
+        Manifest rows per part (an output file, the unit of resuming); the work is cut into
+        tasks sized from the rows left and the workers (`task_chunks`).
     on_limit : {"error", "clip"}, optional
         Overrides what grasp files say about joint values outside the limits.
     retry_failed : bool
