@@ -120,11 +120,11 @@ def compute_rows(
     dict
         ``results``: one dict per row (``id``, ``row``, ``values`` shape (n_paths * n_steps,)
         or None, ``metadata`` JSON text or None, ``error``, ``message``); ``seconds``,
-        ``cpu_seconds`` (this process's, every thread) and ``thread_cpu_seconds`` (the
-        calling thread's: their ratio is the threads' worth of CPU the rows used, whatever
-        the machine's load); ``worker``; ``links_prepared``: hand
-        links this call made solids of (`exactgrasp.hands.prepared`; 0 when every hand was
-        seen before in this process).
+        ``cpu_seconds`` (this process's, every thread, a dask worker's own included) and
+        ``thread_cpu_seconds`` (the calling thread's): their ratio is the threads' worth of
+        CPU the rows used, which the machine's load hardly changes; ``worker``;
+        ``links_prepared``: hand links this call made solids of
+        (`exactgrasp.hands.prepared`; 0 when every hand was seen before in this process).
     """
     if single_thread:
         limit_threads()
