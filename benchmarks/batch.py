@@ -1,136 +1,214 @@
-"""Batch throughput: grasps per minute with 1 and with 2 local workers, and the scaling ratio.
+"""Batch throughput on the human-study records: grasps per second, parallel efficiency, and what
+a row costs inside a Dask worker against the same row in this process.
 
-Builds a manifest of ``--grasps`` grasps of the built-in Barrett hand (finger joints and object
-poses varied, objects from the built-in box and cylinder, one object file each, so the workers
-read files as a real dataset would) or, with ``--data real``, of the 34 real cereal-box grasps
-in ``barrett-grasps/grasps/`` of the shared data folder (`exactgrasp.datapath.data_dir`;
-cycled to ``--grasps``), then runs `exactgrasp.batch.run_batch` into a fresh folder for each
-worker count.
+Rows: ``--records`` (24) of the shared data's raw study records
+(``barrett-grasps/study-records/``), every k-th of the sorted list so that all 13 objects with a
+closed mesh appear (the FoodClip's records are left out: its mesh needs ``--repair``). Every
+row uses the same Barrett hand at its own joint angles.
 
-Reported per worker count:
+``throughput``: for each backend, `exactgrasp.batch.run_batch` with **default options**
+(sampler, backend parameters, part size) and 1 and 2 local workers, alternating which goes
+first from one repeat to the next. Reported per run: grasps/s over ``compute_seconds`` (first
+task submitted to last part written; the workers' start-up inside it, the cluster's start
+outside), the workers' CPU seconds over their busy seconds (their thread use: 1.00 is one
+core each), each worker's busy seconds, and the 1-minute load average before and after. Per
+backend: the speed-up (2 workers over 1, median over repeats), the parallel efficiency
+(speed-up / 2), and whether ``descriptors.parquet`` came out byte-identical.
 
-* ``grasps/min``: rows computed over ``compute_seconds`` (first task submitted to last part
-  written; the workers' start-up, numba cache loading included, is inside this window);
-* ``wall grasps/min``: rows over the whole call, local cluster start and shutdown included;
-* worker CPU seconds per grasp (from ``timings.jsonl``): the work itself, which a busy
-  machine does not inflate the way it inflates wall time;
-* the scaling ratio: grasps/min with N workers over grasps/min with 1.
+``row-cost``: one local worker with one row per task, against `compute_rows` on one thread in
+a fresh process of its own (spawned, as the worker is), on the same rows; the first row of
+each (compiling, loading, preparing the hand) is left out. Median ratio over the rows, of the
+wall seconds and of the computing thread's CPU seconds (which the machine's load inflates
+much less).
 
-One warm-up descriptor in this process first fills numba's on-disk cache, so no worker
-compiles. The machine may be shared: the 1-minute load average is printed with each result.
+The machine may be shared: compare figures only within one run of this script, and read the
+load averages printed beside them.
 
 Usage::
 
-    python benchmarks/batch.py [--grasps 24] [--workers 1,2] [--sampler balanced]
-                               [--backend voxel] [--data builtin|real] [--part-size 4]
+    python benchmarks/batch.py throughput [--records 24] [--backends voxel,exact] [--repeat 1]
+    python benchmarks/batch.py row-cost [--records 6] [--backends voxel] [--repeat 3]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import os
+import statistics
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
+from shared_data import add_data_options, data_or_skip
 
-import exactgrasp as eg
-from exactgrasp.batch import run_batch
-from exactgrasp.datapath import data_dir
+from exactgrasp.batch import read_manifest, run_batch
+from exactgrasp.batch.worker import compute_rows
+from exactgrasp.paths.presets import as_sampler
 
-SHARED_DATA = data_dir()
+RECORDS = "barrett-grasps/study-records"
 
 
-def builtin_manifest(folder: Path, n_grasps: int) -> Path:
-    """``n_grasps`` grasps of the built-in hand on a box and a cylinder, as grasp files."""
-    rng = np.random.default_rng(0)
-    shapes = {"box": eg.objects.box((0.06, 0.1, 0.12)), "cylinder": eg.objects.cylinder()}
-    rows = []
-    for i in range(n_grasps):
-        name = "box" if i % 2 == 0 else "cylinder"
-        joints = {f"finger_{k}_med_joint": float(rng.uniform(0.3, 1.2)) for k in (1, 2, 3)}
-        joints["finger_1_prox_joint"] = float(rng.uniform(0.0, 0.6))
-        pose = np.eye(4)
-        pose[:3, 3] = (*rng.uniform(-0.01, 0.01, 2), 0.11 + rng.uniform(0.0, 0.01))
-        grasp = eg.Grasp(eg.hands.barrett(joints), shapes[name], pose, name=f"grasp{i}")
-        grasp.save(folder / f"grasp{i}.json")
-        rows.append({"id": f"grasp{i}", "grasp": f"grasp{i}.json"})
+def study_manifest(data: Path, folder: Path, n: int) -> Path:
+    """``n`` study records, every k-th of the sorted closed-mesh ones, as a JSONL manifest."""
+    records = sorted((data / RECORDS).rglob("*.json"))
+    records = [p for p in records if p.parent.name != "FoodClip"]
+    step = max(1, len(records) // n)
+    rows = [{"id": p.stem, "grasp": str(p.resolve())} for p in records[::step][:n]]
     path = folder / "manifest.jsonl"
     path.write_text("".join(json.dumps(row) + "\n" for row in rows))
     return path
 
 
-def real_manifest(folder: Path, n_grasps: int) -> Path:
-    """The real cereal-box grasps, by absolute path, cycled to ``n_grasps`` rows."""
-    files = sorted((SHARED_DATA / "barrett-grasps" / "grasps").glob("obj5_*.json"))
-    if not files:
-        sys.exit(f"no real grasps under {SHARED_DATA}; use --data builtin")
-    rows = [{"id": f"row{i}", "grasp": str(files[i % len(files)])} for i in range(n_grasps)]
-    path = folder / "manifest.jsonl"
-    path.write_text("".join(json.dumps(row) + "\n" for row in rows))
-    return path
+def _timings(out: Path) -> list[dict]:
+    lines = (out / "timings.jsonl").read_text().splitlines()
+    return [t for t in map(json.loads, lines) if "part" in t]
+
+
+def _warm(manifest: Path, backend: str) -> None:
+    """Fill numba's disk cache, so that no worker compiles."""
+    rows = read_manifest(manifest).rows[:1]
+    compute_rows(rows, str(manifest.parent), (backend, {}), as_sampler(None).params)
+
+
+def throughput(args, manifest: Path, folder: Path) -> dict:
+    counts = [int(n) for n in args.workers.split(",")]
+    figures = {}
+    for backend in args.backends.split(","):
+        _warm(manifest, backend)
+        runs = {n: [] for n in counts}
+        outs = {}
+        for repeat in range(args.repeat):
+            order = counts if repeat % 2 == 0 else counts[::-1]
+            for n in order:
+                out = folder / f"{backend}-{n}-{repeat}"
+                load = os.getloadavg()[0]
+                summary = run_batch(manifest, out, backend=backend, workers=n, progress=False)
+                if summary.failed:
+                    sys.exit(f"{summary.failed} rows failed: see {out / 'errors.jsonl'}")
+                tasks = _timings(out)
+                busy: dict[str, float] = {}
+                for t in tasks:
+                    busy[t["worker"]] = busy.get(t["worker"], 0.0) + t["seconds"]
+                cpu = sum(t["cpu_seconds"] for t in tasks) / sum(t["seconds"] for t in tasks)
+                run = {
+                    "grasps_per_s": summary.computed / summary.compute_seconds,
+                    "compute_s": summary.compute_seconds,
+                    "wall_s": summary.seconds,
+                    "cpu_per_busy": cpu,
+                    "busy_s": sorted(busy.values(), reverse=True),
+                    "tasks": len(tasks),
+                    "load": [load, os.getloadavg()[0]],
+                }
+                runs[n].append(run)
+                outs[n] = out
+                print(
+                    f"{backend} {n} worker(s), repeat {repeat}: {run['grasps_per_s']:.3f} "
+                    f"grasps/s ({run['compute_s']:.1f} s computing, {run['wall_s']:.1f} s in "
+                    f"all), {run['tasks']} tasks, worker CPU/busy {cpu:.2f}, busy s "
+                    f"{', '.join(f'{b:.1f}' for b in run['busy_s'])}, load "
+                    f"{run['load'][0]:.1f} -> {run['load'][1]:.1f}",
+                    flush=True,
+                )
+        rate = {n: statistics.median(r["grasps_per_s"] for r in runs[n]) for n in counts}
+        same = all(
+            (outs[n] / "descriptors.parquet").read_bytes()
+            == (outs[counts[0]] / "descriptors.parquet").read_bytes()
+            for n in counts
+        )
+        result = {"runs": runs, "median_grasps_per_s": rate, "identical_bytes": same}
+        for n in counts[1:]:
+            speedup = rate[n] / rate[counts[0]]
+            result[f"speedup_{n}"] = speedup
+            result[f"efficiency_{n}"] = speedup * counts[0] / n
+            print(
+                f"{backend}: {n} workers over {counts[0]}: x{speedup:.2f} (efficiency "
+                f"{speedup * counts[0] / n:.2f}); descriptors identical: {same}",
+                flush=True,
+            )
+        figures[backend] = result
+    return figures
+
+
+def _in_process(manifest: str, backend: str, queue) -> None:
+    """Each row alone through `compute_rows` on one thread, in this (fresh) process."""
+    m = read_manifest(manifest)
+    sampler = as_sampler(None).params
+    seconds = []
+    for row in m.rows:
+        outcome = compute_rows([row], str(m.base_dir), (backend, {}), sampler)
+        seconds.append((outcome["seconds"], outcome["thread_cpu_seconds"]))
+    queue.put(seconds)
+
+
+def row_cost(args, manifest: Path, folder: Path) -> dict:
+    figures = {}
+    spawn = multiprocessing.get_context("spawn")
+    for backend in args.backends.split(","):
+        _warm(manifest, backend)
+        ratios, cpu_ratios, pairs = [], [], []
+        for repeat in range(args.repeat):
+            queue = spawn.Queue()
+            proc = spawn.Process(target=_in_process, args=(str(manifest), backend, queue))
+            proc.start()
+            here = queue.get()
+            proc.join()
+            out = folder / f"rowcost-{backend}-{repeat}"
+            run_batch(manifest, out, backend=backend, workers=1, part_size=1, progress=False)
+            tasks = sorted(_timings(out), key=lambda t: t["first_row"])
+            worker = [(t["seconds"], t["thread_cpu_seconds"]) for t in tasks]
+            pairs.append({"in_process_s": here, "in_worker_s": worker})
+            ratio = [w[0] / h[0] for w, h in zip(worker[1:], here[1:], strict=True)]
+            cpu = [w[1] / h[1] for w, h in zip(worker[1:], here[1:], strict=True)]
+            ratios.extend(ratio)
+            cpu_ratios.extend(cpu)
+            print(
+                f"{backend} repeat {repeat}: a row in a worker / in this process, wall: "
+                f"{', '.join(f'{r:.2f}' for r in ratio)}; CPU of the computing thread: "
+                f"{', '.join(f'{r:.2f}' for r in cpu)}; sums {sum(w[0] for w in worker[1:]):.2f}"
+                f" s / {sum(h[0] for h in here[1:]):.2f} s; load {os.getloadavg()[0]:.1f}",
+                flush=True,
+            )
+        median, median_cpu = statistics.median(ratios), statistics.median(cpu_ratios)
+        print(
+            f"{backend}: median row in a worker / in process: wall x{median:.3f}, "
+            f"CPU x{median_cpu:.3f}",
+            flush=True,
+        )
+        figures[backend] = {"median_ratio": median, "median_cpu_ratio": median_cpu}
+        figures[backend]["runs"] = pairs
+    return figures
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--grasps", type=int, default=24)
+    parser.add_argument("mode", choices=["throughput", "row-cost"])
+    parser.add_argument("--records", type=int, default=None, help="rows (24; row-cost: 6)")
+    parser.add_argument("--backends", default=None, help="voxel,exact (row-cost: voxel)")
     parser.add_argument("--workers", default="1,2", help="comma-separated worker counts")
-    parser.add_argument("--sampler", default="balanced")
-    parser.add_argument("--backend", default="voxel")
-    parser.add_argument("--data", choices=["builtin", "real"], default="builtin")
-    parser.add_argument("--part-size", type=int, default=4)
+    parser.add_argument("--repeat", type=int, default=None, help="1 (row-cost: 3)")
+    add_data_options(parser)
     args = parser.parse_args()
-    counts = [int(n) for n in args.workers.split(",")]
-
+    cost = args.mode == "row-cost"
+    args.records = args.records or (6 if cost else 24)
+    args.backends = args.backends or ("voxel" if cost else "voxel,exact")
+    args.repeat = args.repeat or (3 if cost else 1)
+    data = data_or_skip(args, f"{RECORDS}/README.md")
+    if data is None:
+        return 0
     with tempfile.TemporaryDirectory(prefix="exactgrasp-bench-") as tmp:
         folder = Path(tmp)
-        build = real_manifest if args.data == "real" else builtin_manifest
-        manifest = build(folder, args.grasps)
-        # Warm-up: compile (or load) the kernels once so that no worker compiles.
-        first = json.loads(manifest.read_text().splitlines()[0])["grasp"]
-        first = Path(first) if Path(first).is_absolute() else folder / first
-        eg.compute_descriptor(eg.Grasp.from_file(first), args.sampler, args.backend)
-
+        manifest = study_manifest(data, folder, args.records)
         print(
-            f"{args.grasps} {args.data} grasps, sampler {args.sampler!r}, backend "
-            f"{args.backend!r}, part size {args.part_size}, {os.cpu_count()} cores"
+            f"{args.records} study records, default options, {os.cpu_count()} cores, "
+            f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}",
+            flush=True,
         )
-        rates = {}
-        for n in counts:
-            start = time.perf_counter()
-            summary = run_batch(
-                manifest,
-                folder / f"out{n}",
-                backend=args.backend,
-                sampler=args.sampler,
-                workers=n,
-                part_size=args.part_size,
-                progress=False,
-            )
-            wall = time.perf_counter() - start
-            if summary.failed:
-                sys.exit(f"{summary.failed} grasps failed: see {summary.out / 'errors.jsonl'}")
-            rates[n] = 60.0 * summary.computed / summary.compute_seconds
-            lines = (summary.out / "timings.jsonl").read_text().splitlines()
-            cpu = sum(json.loads(line).get("cpu_seconds", 0.0) for line in lines)
-            print(
-                f"workers {n}: {rates[n]:7.1f} grasps/min ({summary.compute_seconds:6.1f} s "
-                f"computing), wall {60.0 * summary.computed / wall:7.1f} grasps/min "
-                f"({wall:6.1f} s with cluster start), worker CPU "
-                f"{cpu / summary.computed:.2f} s/grasp, "
-                f"load {os.getloadavg()[0]:.1f}"
-            )
-        for n in counts[1:]:
-            print(f"scaling {n} vs {counts[0]} workers: {rates[n] / rates[counts[0]]:.2f}x")
-        same = all(
-            (folder / f"out{n}" / "descriptors.parquet").read_bytes()
-            == (folder / f"out{counts[0]}" / "descriptors.parquet").read_bytes()
-            for n in counts[1:]
-        )
-        print(f"descriptors.parquet identical across worker counts: {same}")
+        figures = (row_cost if cost else throughput)(args, manifest, folder)
+    if args.json:
+        args.json.write_text(json.dumps(figures, indent=1) + "\n")
     return 0
 
 

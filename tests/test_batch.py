@@ -120,6 +120,25 @@ def test_two_worker_local_cluster(run_two, manifest):
     assert values.max() > 0
 
 
+def test_each_worker_prepares_the_hand_once(run_two, manifest):
+    # Every good row is the built-in Barrett hand at its own joints: 9 links of 4 distinct
+    # meshes (the fingers share theirs). A worker makes the 4 solids for its first good row
+    # and reuses them for every later one.
+    out, _ = run_two
+    good = {row.index for row in read_manifest(manifest).rows if row.id in GOOD}
+    tasks = [json.loads(line) for line in (out / "timings.jsonl").read_text().splitlines()]
+    tasks = [t for t in tasks if "part" in t]
+    assert sum(t["rows"] for t in tasks) == len(GOOD) + len(BAD)
+    prepared: dict[str, int] = {}
+    computed_good: dict[str, bool] = {}
+    for t in tasks:
+        rows = set(range(t["first_row"], t["first_row"] + t["rows"]))
+        prepared[t["worker"]] = prepared.get(t["worker"], 0) + t["links_prepared"]
+        computed_good[t["worker"]] = computed_good.get(t["worker"], False) or bool(rows & good)
+    assert prepared == {w: 4 if computed_good[w] else 0 for w in prepared}
+    assert sum(prepared.values()) >= 4
+
+
 def test_one_and_two_workers_give_identical_bytes(run_one, run_two):
     assert run_one[1].workers == 1
     one, two = _deterministic_files(run_one[0]), _deterministic_files(run_two[0])

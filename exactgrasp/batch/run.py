@@ -1,7 +1,8 @@
 """`run_batch`: the descriptor of every grasp in a manifest, resumable, on many cores.
 
-Work is cut into parts of ``part_size`` consecutive manifest rows. Each part is one task on a
-dask.distributed cluster (a local cluster of single-threaded processes by default, or an
+Work is cut into parts of ``part_size`` consecutive manifest rows (the files, and the unit of
+resuming), and parts into tasks sized from the rows left and the workers (`task_chunks`), run
+on a dask.distributed cluster (a local cluster of single-threaded processes by default, or an
 existing scheduler); the workers only compute and send results back, and this process writes
 every file, so workers need no shared file system and each part is renamed into place whole.
 A resume skips the parts already there. See ``docs/batch.md`` for the file layout and the
@@ -46,7 +47,7 @@ from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.progress import progress_bar
 from exactgrasp.version import __version__
 
-__all__ = ["DEFAULT_PART_SIZE", "BatchSummary", "run_batch"]
+__all__ = ["DEFAULT_PART_SIZE", "TASK_SHARES", "BatchSummary", "run_batch", "task_chunks"]
 
 log = logging.getLogger(__name__)
 
@@ -68,7 +69,8 @@ class BatchSummary:
     seconds : float
         Wall time of this run, cluster start included (s).
     compute_seconds : float
-        Wall time from the first task submitted to the last part written (s).
+        Wall time from the first task submitted to the last part written (s), the workers
+        started and warmed up (`exactgrasp.batch.worker.warm_up`) before it.
     workers : int
         Worker processes (threads on an existing cluster); 0 when run in this process.
     """
@@ -190,7 +192,8 @@ def run_batch(
     progress : bool, optional
         Progress bar; default only on a terminal.
     part_size : int
-        Manifest rows per part (the unit of work and of resuming).
+        Manifest rows per part (an output file, the unit of resuming); the work is cut into
+        tasks sized from the rows left and the workers (`task_chunks`).
     on_limit : {"error", "clip"}, optional
         Overrides what grasp files say about joint values outside the limits.
     retry_failed : bool
@@ -257,6 +260,7 @@ def run_batch(
             if workers is None and scheduler is None:
                 workers = default_workers()
             with open_pool(workers, scheduler) as pool:
+                pool.warm(spec)
                 n_workers, compute_start = pool.workers, time.perf_counter()
                 expected = [params["exactgrasp_version"], params["backend_params"]]
                 task = (str(manifest.base_dir), spec, sampler.params, overrides, expected)
@@ -296,12 +300,50 @@ def _existing_parts(out: Path, parts: list, n_values: int, retry_failed: bool) -
     return present
 
 
+#: A task takes at most 1/TASK_SHARES of a worker's share of the rows left: tasks shrink as the
+#: run ends, so the last ones are single rows and no worker waits long on another.
+TASK_SHARES = 3
+
+
+def task_chunks(todo: dict[int, list], workers: int) -> list[tuple[int, list]]:
+    """Cut the parts' rows into tasks sized from the rows left and the workers.
+
+    A task holds ``ceil(left / (TASK_SHARES * workers))`` consecutive rows of one part (one
+    at least), ``left`` being the rows not yet given to a task: large tasks first, while
+    there is much to share, then smaller ones, so that workers finish together. Parts (the
+    files and the unit of resuming) do not change: a part is written when all its tasks are in.
+
+    Parameters
+    ----------
+    todo : dict of int to list of ManifestRow
+        Part number -> its rows, in part order.
+    workers : int
+        Tasks that run at once (0 or 1: one task per part).
+
+    Returns
+    -------
+    list of (int, list of ManifestRow)
+        (part, rows) per task, in manifest order.
+    """
+    if workers <= 1:
+        return list(todo.items())
+    left = sum(len(rows) for rows in todo.values())
+    chunks = []
+    for part, rows in todo.items():
+        start = 0
+        while start < len(rows):
+            size = max(1, -(-left // (TASK_SHARES * workers)))
+            chunks.append((part, rows[start : start + size]))
+            left -= len(chunks[-1][1])
+            start += size
+    return chunks
+
+
 def _compute(pool, todo: dict, task: tuple, out: Path, n_values, n_rows, skipped, progress):
-    """Run the parts in ``todo`` (part -> rows) through ``pool``; write each part when all its
-    rows are in, and its wall and CPU seconds to the timings file."""
-    queue = deque(todo.items())
+    """Run the parts in ``todo`` (part -> rows) through ``pool`` as `task_chunks`; write each
+    part when all its rows are in, and each task's wall and CPU seconds to the timings file."""
+    queue = deque(task_chunks(todo, pool.workers))
     collected: dict[int, dict[int, dict]] = {p: {} for p in todo}
-    spent = {p: [0.0, 0.0] for p in todo}
     with (
         progress_bar(n_rows, "grasps", progress) as bar,
         open(out / TIMINGS_FILE, "a") as timings,
@@ -316,25 +358,28 @@ def _compute(pool, todo: dict, task: tuple, out: Path, n_values, n_rows, skipped
         fill()
         for (part, rows), outcome, error in pool.completed():
             if error is not None and len(rows) > 1:
-                # Find the grasp that kills its worker: run the part's rows one by one.
-                log.warning("part %d failed as a whole (%s); retrying row by row", part, error)
+                # Find the grasp that kills its worker: run the task's rows one by one.
+                log.warning("a task of part %d failed (%s); retrying row by row", part, error)
                 queue.extendleft((part, [row]) for row in reversed(rows))
             else:
                 for result in [_failure(rows[0], error)] if error else outcome["results"]:
                     collected[part][result["row"]] = result
                 if outcome:
-                    spent[part][0] += outcome["seconds"]
-                    spent[part][1] += outcome["cpu_seconds"]
+                    line = {"part": part, "first_row": rows[0].index, "rows": len(rows)}
+                    keys = (
+                        "seconds",
+                        "cpu_seconds",
+                        "thread_cpu_seconds",
+                        "worker",
+                        "links_prepared",
+                    )
+                    line.update((key, outcome.get(key)) for key in keys)
+                    timings.write(json.dumps(line) + "\n")
+                    timings.flush()
+                bar.update(len(rows))
                 if len(collected[part]) == len(todo[part]):
                     got = collected.pop(part)
                     write_part(out, part, [got[row.index] for row in todo[part]], n_values)
-                    wall, cpu = spent[part]
-                    worker = outcome["worker"] if outcome else None
-                    line = {"part": part, "rows": len(todo[part]), "seconds": wall}
-                    line.update(cpu_seconds=cpu, worker=worker)
-                    timings.write(json.dumps(line) + "\n")
-                    timings.flush()
-                    bar.update(len(todo[part]))
             fill()
     if collected:
         raise BatchError(f"parts {sorted(collected)} were not completed; run again to resume.")

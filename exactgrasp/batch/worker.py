@@ -1,7 +1,8 @@
 """The worker side of a batch run: computing rows, and the pools that run parts.
 
 `exactgrasp.batch.run` keeps the run logic (parts, resume, files); this module holds what
-executes on a worker process (`compute_rows`) or in this process (`open_pool`, the pools).
+executes on a worker process (`compute_rows`, `warm_up`) or in this process (`open_pool`, the
+pools).
 
 distributed loads only through `exactgrasp.errors.require`.
 """
@@ -15,34 +16,44 @@ import os
 import socket
 import time
 import uuid
+import warnings
 from collections import deque
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from exactgrasp.backends import Backend
 from exactgrasp.backends.base import thread_limit
 from exactgrasp.backends.registry import shared_backend
 from exactgrasp.batch.manifest import ManifestRow
+from exactgrasp.batch.threads import THREAD_ENV, limit_threads
 from exactgrasp.descriptor import compute_descriptor
 from exactgrasp.diagnostics import ignores_third_party_warnings
 from exactgrasp.errors import BatchError, require
+from exactgrasp.geometry.objects import box
 from exactgrasp.grasp import Grasp
+from exactgrasp.hands.frame import HandFrame
+from exactgrasp.hands.hand import Hand
+from exactgrasp.hands.prepared import LINK_SOLIDS
 from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.version import __version__
 
-__all__ = ["THREAD_ENV", "compute_rows", "default_workers", "open_pool"]
+__all__ = [
+    "THREAD_ENV",
+    "WORKER_CONFIG",
+    "compute_rows",
+    "default_workers",
+    "open_pool",
+    "warm_up",
+]
 
 log = logging.getLogger("exactgrasp.batch")
 
-#: Set in local worker processes before they start: one process per core already fills the
-#: machine, so numba, OpenMP and BLAS thread pools inside a worker would only oversubscribe it.
-THREAD_ENV = {
-    "NUMBA_NUM_THREADS": "1",
-    "OMP_NUM_THREADS": "1",
-    "MKL_NUM_THREADS": "1",
-    "OPENBLAS_NUM_THREADS": "1",
-}
+#: Dask settings of the local cluster's workers. The statistical profiler samples every
+#: thread's stack every 10 ms: off, a row costs in a worker what it costs in this process.
+WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
 
 
 # -- on the workers -----------------------------------------------------------------------------
@@ -96,17 +107,25 @@ def compute_rows(
         The exactgrasp version and backend parameters of the run; rows fail when this worker's
         differ.
     single_thread : bool
-        Run backends given ``n_jobs=None`` on one thread (a worker per
-        core already fills the machine); False leaves them every core.
+        Compute each row on one thread, numba, BLAS and manifold3d included
+        (`exactgrasp.batch.threads`): a worker has one thread per core it may use. False
+        leaves backends given ``n_jobs=None`` every core.
 
     Returns
     -------
     dict
         ``results``: one dict per row (``id``, ``row``, ``values`` shape (n_paths * n_steps,)
-        or None, ``metadata`` JSON text or None, ``error``, ``message``); ``seconds``;
-        ``worker``.
+        or None, ``metadata`` JSON text or None, ``error``, ``message``); ``seconds``,
+        ``cpu_seconds`` (this process's, every thread, a dask worker's own included) and
+        ``thread_cpu_seconds`` (the calling thread's): their ratio is the threads' worth of
+        CPU the rows used, which the machine's load hardly changes; ``worker``;
+        ``links_prepared``: hand links this call made solids of
+        (`exactgrasp.hands.prepared`; 0 when every hand was seen before in this process).
     """
-    start, cpu_start = time.perf_counter(), time.process_time()
+    if single_thread:
+        limit_threads()
+    start, cpu_start, thread_start = time.perf_counter(), time.process_time(), time.thread_time()
+    builds = LINK_SOLIDS.builds
     sampler = PathSampler.from_params(sampler_params)
     engine = _worker_backend(backend)
     mismatch = None
@@ -144,8 +163,40 @@ def compute_rows(
         "results": results,
         "seconds": time.perf_counter() - start,
         "cpu_seconds": time.process_time() - cpu_start,
+        "thread_cpu_seconds": time.thread_time() - thread_start,
         "worker": f"{socket.gethostname()}:{os.getpid()}",
+        "links_prepared": LINK_SOLIDS.builds - builds,
     }
+
+
+def warm_up(backend: Backend | tuple[str, dict]) -> str:
+    """Ready this worker process before any row: threads limited (`limit_threads`), the
+    backend built, its compiled kernels loaded from numba's cache.
+
+    The kernels load by computing one pose of a small made-up grasp (a box hand, a box
+    object), whose hand is no dataset's: the hands the rows use are still prepared, and
+    counted, by the rows.
+
+    Parameters
+    ----------
+    backend : Backend or (str, dict)
+
+    Returns
+    -------
+    str
+        This worker, ``host:pid``.
+    """
+    limit_threads()
+    engine = _worker_backend(backend)
+    hand = Hand.from_meshes([box((0.1, 0.1, 0.04))], frame=HandFrame.identity())
+    pose = np.eye(4)
+    pose[2, 3] = 0.034  # the object's bottom 1 mm into the hand's top
+    grasp = Grasp(hand, box((0.03, 0.03, 0.03)), pose, name="warm-up")
+    # What the diagnostics would say of a made-up grasp is nobody's concern.
+    with thread_limit(1), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        compute_descriptor(grasp, PathSampler(1, 1, 1, n_steps=1), engine, progress=False)
+    return f"{socket.gethostname()}:{os.getpid()}"
 
 
 # -- pools: in this process, or on dask.distributed --------------------------------------------
@@ -159,6 +210,9 @@ class _SerialPool:
 
     def __init__(self):
         self._queue: deque = deque()
+
+    def warm(self, backend: Backend | tuple[str, dict]) -> None:
+        """Nothing to ready: the rows run here."""
 
     def submit(self, chunk: tuple, args: tuple) -> None:
         self._queue.append((chunk, args))
@@ -189,11 +243,15 @@ class _DaskPool:
         self._futures = as_completed()
         self._chunks: dict[str, tuple] = {}
         self._token = uuid.uuid4().hex[:8]
+        self._submitted = 0
 
     def submit(self, chunk: tuple, args: tuple) -> None:
         part, rows = chunk
-        suffix = f"-row{rows[0].index}" if len(rows) == 1 else ""
-        key = f"exactgrasp-batch-{self._token}-part{part}{suffix}"
+        # Unique per submission: a part has several tasks, and a failed task comes back as
+        # single rows.
+        self._submitted += 1
+        first, last = rows[0].index, rows[-1].index
+        key = f"exactgrasp-batch-{self._token}-{self._submitted}-part{part}-rows{first}-{last}"
         future = self.client.submit(compute_rows, *args, key=key, pure=False, retries=0)
         self._chunks[future.key] = chunk
         self._futures.add(future)
@@ -201,6 +259,23 @@ class _DaskPool:
     @property
     def in_flight(self) -> int:
         return len(self._chunks)
+
+    def warm(self, backend: Backend | tuple[str, dict]) -> None:
+        """`warm_up` on every worker there now, all at once, before any row is handed out:
+        a worker still importing would otherwise sit on the tasks given to it."""
+        workers = list(self.client.scheduler_info()["workers"])
+        futures = [
+            self.client.submit(
+                warm_up, backend, key=f"exactgrasp-warm-{self._token}-{n}", pure=False,
+                workers=[address], allow_other_workers=False,
+            )
+            for n, address in enumerate(workers)
+        ]  # fmt: skip
+        for future in futures:
+            try:
+                future.result()
+            except Exception as exc:  # the rows will say what is wrong, row by row
+                log.warning("warming a worker up failed: %s", exc)
 
     def completed(self):
         for future in self._futures:
@@ -220,21 +295,24 @@ def open_pool(workers: int | None, scheduler: str | None) -> Iterator[Any]:
         yield _SerialPool()
         return
     require("distributed", "exactgrasp batch", "distributed", "batch")
+    import dask
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
         with Client(scheduler) as client:
             yield _DaskPool(client)
         return
-    cluster = LocalCluster(
-        n_workers=workers,
-        threads_per_worker=1,
-        processes=True,
-        # Any free port: a fixed one (8787) clashes with other clusters on the machine.
-        dashboard_address=":0",
-        silence_logs=logging.ERROR,
-        env=THREAD_ENV,
-    )
+    # The nannies hand this process's dask settings to the worker processes they start.
+    with dask.config.set(WORKER_CONFIG):
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            # Any free port: a fixed one (8787) clashes with other clusters on the machine.
+            dashboard_address=":0",
+            silence_logs=logging.ERROR,
+            env=THREAD_ENV,
+        )
     with cluster, Client(cluster) as client:
         yield _DaskPool(client)
 

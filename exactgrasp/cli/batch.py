@@ -108,7 +108,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--part-size",
         type=int,
         default=DEFAULT_PART_SIZE,
-        help=f"rows per part, the unit of resuming (default {DEFAULT_PART_SIZE})",
+        help=(
+            f"rows per output part, the unit of resuming (default {DEFAULT_PART_SIZE}); the "
+            "work is cut into tasks sized from the rows and the workers"
+        ),
     )
     parser.add_argument(
         "--retry-failed", action="store_true", help="compute the parts with failed rows again"

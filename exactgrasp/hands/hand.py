@@ -19,12 +19,12 @@ import numpy as np
 import trimesh
 
 from exactgrasp.errors import Fix, FrameError, JointError, MeshError
-from exactgrasp.geometry.manifold import union_volume
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.loading import jsonable, load_model_cached
 from exactgrasp.hands.noise import joint_noise
 from exactgrasp.hands.palm import missing_palm_fix
+from exactgrasp.hands.prepared import union_volume_of_links
 
 __all__ = ["Hand", "HandModel", "RigidModel"]
 
@@ -342,8 +342,12 @@ class Hand:
 
     @cached_property
     def volume(self) -> float:
-        """Volume of the union of the posed links, m^3."""
-        return union_volume(self.link_arrays(), name=self.model.name)
+        """Volume of the union of the posed links, m^3.
+
+        Summed from the links' volumes and their overlaps, with each link's solid prepared
+        once per process (`exactgrasp.hands.prepared`); a single link is its own volume.
+        """
+        return union_volume_of_links(self)
 
     @cached_property
     def geometry_hash(self) -> str:
