@@ -49,6 +49,7 @@ def __getattr__(name: str):
         "run_batch": ("exactgrasp.batch", "run_batch"),
         "read_batch": ("exactgrasp.batch", "read_batch"),
         "intersection_volume": ("exactgrasp.overlap", "intersection_volume"),
+        "intersection_gradient": ("exactgrasp.overlap", "intersection_gradient"),
         "show": ("exactgrasp.view", "show"),
     }
     if name in lazy:
@@ -88,6 +89,7 @@ __all__ = [
     "distance",
     "get_backend",
     "hands",
+    "intersection_gradient",
     "intersection_volume",
     "joint_noise",
     "object_pose_noise",

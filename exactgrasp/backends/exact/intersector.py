@@ -173,7 +173,11 @@ class ExactIntersector:
         # too (manifold3d's tolerance grows with the coordinates' magnitude), so that rounding
         # depends on the geometry's size, not on where it lies.
         self.origin = bounds_centre(hand_links)
-        self.hand_solid = union_solids(solids(shifted(hand_links, self.origin), "hand link"))
+        # Each link its own manifold3d original, so that the faces of the union and of any
+        # boolean with it say which link they come from (`moments`).
+        links = [s.as_original() for s in solids(shifted(hand_links, self.origin), "hand link")]
+        self.link_ids = [int(s.original_id()) for s in links]
+        self.hand_solid = union_solids(links)
         self.object_solid = union_solids(
             solids(shifted(object_bodies, self.origin), "object body")
         )
