@@ -15,7 +15,7 @@ from exactgrasp.backends.base import check_poses
 from exactgrasp.backends.exact.intersector import ExactIntersector
 from exactgrasp.backends.exact.moments import boolean_moments, shift_moments
 
-__all__ = ["VolumeGradients", "object_twist", "volume_moments"]
+__all__ = ["VolumeGradients", "boolean_volume_moments", "object_twist", "volume_moments"]
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,9 @@ class VolumeGradients:
 
 
 def volume_moments(intersector: ExactIntersector, poses: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Volumes and, per link, ``(F_l, M_l)`` of its boundary inside the moved object.
+    """Volumes and, per link, ``(F_l, M_l)`` of its boundary inside the moved object, from the
+    kernel (`ExactIntersector.volume_moments`; the boolean where the kernel hands a pose to
+    it).
 
     Parameters
     ----------
@@ -67,6 +69,14 @@ def volume_moments(intersector: ExactIntersector, poses: np.ndarray) -> tuple[np
         Moments in the input frame (area units, then area times length), zero where the
         volume reads 0. ``-links.sum(-2)`` are the object's moments (see `moments`).
     """
+    return intersector.volume_moments(check_poses(poses))
+
+
+def boolean_volume_moments(
+    intersector: ExactIntersector, poses: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """`volume_moments` from one manifold3d boolean per pose with a non-zero volume (the
+    kernel's reference; volumes from the kernel, so that both read 0 at the same poses)."""
     poses = check_poses(poses)
     flat = poses.reshape(-1, 4, 4)
     volumes = np.asarray(intersector.volumes(flat), dtype=np.float64).reshape(-1)

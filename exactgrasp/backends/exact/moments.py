@@ -26,7 +26,7 @@ import numpy as np
 
 from exactgrasp.backends.exact.tolerances import BOOLEAN_ROUNDING
 
-__all__ = ["boolean_moments", "shift_moments", "triangle_moments"]
+__all__ = ["boolean_moments", "face_origins", "shift_moments", "triangle_moments"]
 
 
 def triangle_moments(V: np.ndarray, F: np.ndarray) -> np.ndarray:
@@ -108,3 +108,15 @@ def boolean_moments(
         else:
             obj += part
     return volume, links, obj
+
+
+def face_origins(solid: manifold3d.Manifold, link_ids: list[int]) -> np.ndarray:
+    """The link (index into ``link_ids``) of each triangle of ``solid.to_mesh64()``, from the
+    mesh's runs of original ids (m,) int64."""
+    mesh = solid.to_mesh64()
+    starts = np.asarray(mesh.run_index, np.int64) // 3
+    row = {oid: k for k, oid in enumerate(link_ids)}
+    out = np.empty(len(np.asarray(mesh.tri_verts)), np.int64)
+    for r, oid in enumerate(np.asarray(mesh.run_original_id)):
+        out[starts[r] : starts[r + 1]] = row[int(oid)]
+    return out

@@ -3,8 +3,9 @@
 Each pose runs the stages of "Method, per pose" in ``docs/exact-backend.md`` in order: move
 (`move_object`), near runs (`near_pass`), seeds (`seeds.object_edge_seeds`,
 `seeds.cotree_seeds`), pairs
-(`search.trace_pairs`), classify (`classify.classify_vertices`) and sum (`sums.volume_sum`).
-The tables are `tables`' named tuples. Imports numba, `classify`, `search`, `seeds`, `sums`,
+(`search.trace_pairs`), classify (`classify.classify_vertices`) and sum (`sums.volume_sum`),
+then, where asked, the derivatives' moments (`moment_sums.hand_moments`). The tables are
+`tables`' named tuples. Imports numba, `classify`, `moment_sums`, `search`, `seeds`, `sums`,
 `tables` and `tolerances`.
 """
 
@@ -13,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.backends.exact.classify import classify_vertices
+from exactgrasp.backends.exact.moment_sums import hand_moments
 from exactgrasp.backends.exact.search import trace_pairs
 from exactgrasp.backends.exact.seeds import (
     cotree_seeds,
@@ -142,6 +144,7 @@ def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs,
         np.empty((3, 2), np.int64),
         np.zeros(hand.parts.shape[0] - 1, np.bool_),
         np.empty(longest, np.int64),
+        np.empty((pairs, 7)),
     )
 
 
@@ -183,7 +186,7 @@ def _vertex_bound(V):
 @kernel(nogil=True, error_model="numpy")
 def pose_volumes(
     poses, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap,
-    out, bounds, codes, stats,
+    out, bounds, codes, stats, mom, moments,
 ):  # fmt: skip
     """Volume of hand ∩ (pose · object) for each pose; the hand is fixed, the object is in its
     own frame.
@@ -211,6 +214,11 @@ def pose_volumes(
     stats : numpy.ndarray, shape (k, N_STATS), int64
         Face pairs evaluated, crossing pairs, and the hand's parts classified vertex by vertex
         / whole inside / whole outside (columns ``STAT_*``).
+    mom : tables.MomentTables
+        The hand's moment tables, or empty ones (volumes only).
+    moments : numpy.ndarray, shape (k, L, 6), float64
+        Zeros, to which each `OK` pose with a non-zero volume adds the moments of each link's
+        boundary inside the object (`moment_sums.hand_moments`); L = 0: volumes only.
 
     A pose whose pair table or seed buffer fills up (`GROW`) is computed again with both
     doubled: results do not depend on their sizes.
@@ -282,6 +290,11 @@ def pose_volumes(
             )
             out[ip] = vol
             bounds[ip] = bound
+            if code == OK and vol > 0.0 and moments.shape[1] > 0:
+                hand_moments(
+                    hand_mesh, hand, mom, scratch.hand_status, scratch.uniform, W.hand_count,
+                    W.hand_rec.edge, W.hand_rec.lam, W.nrec[0], W.segments, ncross, moments[ip],
+                )  # fmt: skip
         codes[ip] = code
         stats[ip, STAT_PAIRS] = npairs
         stats[ip, STAT_CROSSING] = ncross

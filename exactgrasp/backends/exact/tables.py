@@ -186,6 +186,29 @@ class ObjectTables(NamedTuple):
     part_weights: np.ndarray
 
 
+class MomentTables(NamedTuple):
+    """What the volume's derivatives read of the fixed hand (`moment_sums.moment_tables`):
+    which link each face comes from, and the moments of whole edges and parts. Empty (no
+    rows) when a call wants volumes only.
+
+    ``m`` faces, ``e`` edges, ``parts`` as in `HandTables`, ``k`` (part, link) entries; the
+    moments are ``(∫ n dA, ∫ x × n dA)`` of a face's piece (`moments`), local coordinates.
+    """
+
+    #: (m,) int64: the link (index into the hand's links) of each face.
+    face_link: np.ndarray
+    #: (e, 2) int64: the links of each edge's faces ``t1`` and ``t2``.
+    edge_links: np.ndarray
+    #: (e, 12) float64: the whole edge's share of ``t1``'s moments (6), then of ``t2``'s (6).
+    edge_moments: np.ndarray
+    #: (parts + 1,) int64: CSR start of each part's entries in `part_link`.
+    part_start: np.ndarray
+    #: (k,) int64: the link of each entry.
+    part_link: np.ndarray
+    #: (k, 6) float64: the summed moments of the part's own edges on that link's faces.
+    part_moments: np.ndarray
+
+
 class Crossings(NamedTuple):
     """The edge crossings one mesh's faces record in a pose (``capacity`` long; the count is
     in `Workspace.nrec`)."""
@@ -233,6 +256,10 @@ class Workspace(NamedTuple):
     #: (longest cell list of either grid,) int64: the listed faces of a cell that pass the box
     #: filters.
     survivors: np.ndarray
+    #: (pair table size, 7) float64: per crossing pair of the pose, in the order traced, its
+    #: hand face and its segment's ends p, q (directed along ``n_t × n_s``): what the
+    #: volume's derivatives integrate over (`moments`).
+    segments: np.ndarray
 
 
 class PoseScratch(NamedTuple):
