@@ -15,13 +15,14 @@ Along an edge ``u → v`` the pieces inside are parameter intervals ``[a, b]``; 
 ``w = u × v``, and face ``t2`` (which runs ``v → u``) takes the same with ``n2`` and the
 opposite sign. So the derivatives need only the statuses, the crossings and the traced
 segments of the volume's pass (see `moments` for what the moments give). Imports numba,
-numpy and `tables`.
+numpy, `sums` and `tables`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from exactgrasp.backends.exact.sums import _order_by_key
 from exactgrasp.backends.exact.tables import MomentTables
 from exactgrasp.compiling import inner
 
@@ -43,8 +44,20 @@ def _edge_shares(V, E, ET, unit, f, h):
     return out
 
 
+def _grouped(keys: np.ndarray, values: np.ndarray, n_links: int, n_groups: int):
+    """Sums of ``values`` (k, 6) by ``keys`` = group * n_links + link: (CSR start per group
+    (n_groups + 1,), link per entry, sums per entry)."""
+    uniq, inv = np.unique(keys, return_inverse=True)
+    sums = np.zeros((len(uniq), 6))
+    np.add.at(sums, inv.reshape(-1), values)
+    start = np.zeros(n_groups + 1, np.int64)
+    np.cumsum(np.bincount(uniq // n_links, minlength=n_groups), out=start[1:])
+    return start, np.ascontiguousarray(uniq % n_links, dtype=np.int64), sums
+
+
 def moment_tables(mesh, hand, face_link: np.ndarray, n_links: int) -> MomentTables:
-    """The hand's `tables.MomentTables`.
+    """The hand's `tables.MomentTables`; also writes each face's link into
+    ``hand.face_records[:, 18]`` (what the traced segments carry).
 
     Parameters
     ----------
@@ -60,23 +73,32 @@ def moment_tables(mesh, hand, face_link: np.ndarray, n_links: int) -> MomentTabl
     ones = np.ones(len(E))
     shares = _edge_shares(V, E, ET, unit, ones, ones)
     links = np.ascontiguousarray(face_link[ET])
+    # Each edge's shares, on its lower vertex (E holds u < v) and that vertex's part.
+    low = np.concatenate([E[:, 0], E[:, 0]])
+    link = np.concatenate([links[:, 0], links[:, 1]])
+    vals = np.concatenate([shares[:, :6], shares[:, 6:]])
+    n = len(V)
+    vstart, vlink, vsums = _grouped(low * n_links + link, vals, n_links, n)
+    single = (vstart[1:] - vstart[:-1]) == 1
+    vertex_link = np.full(n, -1, np.int64)
+    vertex_moments = np.zeros((n, 6))
+    none = vstart[1:] == vstart[:-1]
+    vertex_link[none] = 0  # no edge to a higher-numbered vertex: adds zeros
+    vertex_link[single] = vlink[vstart[:-1][single]]
+    vertex_moments[single] = vsums[vstart[:-1][single]]
     nparts = len(hand.parts) - 1
-    own = np.flatnonzero(hand.edge_part >= 0)
-    part = hand.edge_part[own] * n_links
-    keys = np.concatenate([part + links[own, 0], part + links[own, 1]])
-    vals = np.concatenate([shares[own, :6], shares[own, 6:]])
-    uniq, inv = np.unique(keys, return_inverse=True)
-    sums = np.zeros((len(uniq), 6))
-    np.add.at(sums, inv, vals)
-    start = np.zeros(nparts + 1, np.int64)
-    np.cumsum(np.bincount(uniq // n_links, minlength=nparts), out=start[1:])
+    part_of = np.searchsorted(hand.parts[:, 1], low, side="right") - 1
+    pstart, plink, psums = _grouped(part_of * n_links + link, vals, n_links, nparts)
+    hand.face_records[:, 18] = face_link
     return MomentTables(
         np.ascontiguousarray(face_link, dtype=np.int64),
         links.astype(np.int64),
         np.ascontiguousarray(shares),
-        start,
-        np.ascontiguousarray(uniq % n_links, dtype=np.int64),
-        np.ascontiguousarray(sums),
+        vertex_link,
+        vertex_moments,
+        pstart,
+        plink,
+        np.ascontiguousarray(psums),
     )
 
 
@@ -86,6 +108,8 @@ def empty_moment_tables() -> MomentTables:
         np.zeros(0, np.int64),
         np.zeros((0, 2), np.int64),
         np.zeros((0, 12)),
+        np.zeros(0, np.int64),
+        np.zeros((0, 6)),
         np.zeros(1, np.int64),
         np.zeros(0, np.int64),
         np.zeros((0, 6)),
@@ -93,28 +117,25 @@ def empty_moment_tables() -> MomentTables:
 
 
 @inner(nogil=True, error_model="numpy")
-def _add_share(G, l1, l2, V, u, v, n1x, n1y, n1z, n2x, n2y, n2z, f, h):
-    """Add an edge's inside share (fractions f, h) to links l1 (face t1) and l2 (face t2)."""
-    ux, uy, uz = V[u, 0], V[u, 1], V[u, 2]
-    vx, vy, vz = V[v, 0], V[v, 1], V[v, 2]
+def _share(ux, uy, uz, vx, vy, vz, nx, ny, nz, f, h):
+    """The moments (6 scalars) of the inside share (fractions f, h) of edge u -> v on a face
+    with unit normal n that runs u -> v (negate them for the face that runs v -> u).
+    Scalars only: a routine taking arrays would update reference counts per edge."""
     wx, wy, wz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
     sx = 2.0 * f * ux + h * (vx - ux)
     sy = 2.0 * f * uy + h * (vy - uy)
     sz = 2.0 * f * uz + h * (vz - uz)
-    c = n1x * wx + n1y * wy + n1z * wz
-    G[l1, 0] += n1x * c * f / 2.0
-    G[l1, 1] += n1y * c * f / 2.0
-    G[l1, 2] += n1z * c * f / 2.0
-    G[l1, 3] += (sy * n1z - sz * n1y) * c / 6.0
-    G[l1, 4] += (sz * n1x - sx * n1z) * c / 6.0
-    G[l1, 5] += (sx * n1y - sy * n1x) * c / 6.0
-    c = -(n2x * wx + n2y * wy + n2z * wz)
-    G[l2, 0] += n2x * c * f / 2.0
-    G[l2, 1] += n2y * c * f / 2.0
-    G[l2, 2] += n2z * c * f / 2.0
-    G[l2, 3] += (sy * n2z - sz * n2y) * c / 6.0
-    G[l2, 4] += (sz * n2x - sx * n2z) * c / 6.0
-    G[l2, 5] += (sx * n2y - sy * n2x) * c / 6.0
+    c = nx * wx + ny * wy + nz * wz
+    a = c * f / 2.0
+    b = c / 6.0
+    return (
+        nx * a,
+        ny * a,
+        nz * a,
+        (sy * nz - sz * ny) * b,
+        (sz * nx - sx * nz) * b,
+        (sx * ny - sy * nx) * b,
+    )
 
 
 @inner(nogil=True, error_model="numpy")
@@ -130,7 +151,9 @@ def _sort_small(x, n):
 
 
 @inner(nogil=True, error_model="numpy")
-def hand_moments(hand_mesh, hand, mom, S, uniform, cnt, rec_e, rec_l, nrec, segs, ncross, G):
+def hand_moments(
+    hand_mesh, hand, mom, S, uniform, cnt, rec_e, rec_l, nrec, multi, segs, ncross, G
+):  # fmt: skip
     """Moments ``(∫ n dA, ∫ x × n dA)`` of each link's boundary inside the object, added to
     ``G`` (L, 6), local coordinates, after a pose's volume pass.
 
@@ -145,6 +168,8 @@ def hand_moments(hand_mesh, hand, mom, S, uniform, cnt, rec_e, rec_l, nrec, segs
         The parts classified whole.
     cnt, rec_e, rec_l, nrec : numpy.ndarray, int
         The hand edges' crossing counts and records (edge, parameter) and their number.
+    multi : numpy.ndarray, shape (>= nrec,) int64
+        Scratch.
     segs : numpy.ndarray, shape (>= ncross, 7)
         The pose's crossing segments (hand face, p, q), `tables.Workspace.segments`.
     ncross : int
@@ -152,16 +177,16 @@ def hand_moments(hand_mesh, hand, mom, S, uniform, cnt, rec_e, rec_l, nrec, segs
     """
     V, E, ET = hand_mesh.vertices, hand_mesh.edges, hand_mesh.edge_faces
     adj_start, adj_vert, adj_edge = hand_mesh.adj_start, hand_mesh.adj_vertex, hand_mesh.adj_edge
-    adj_split, reps, planes = hand.adj_split, hand.parts, hand.planes
-    flink, elink, emom = mom.face_link, mom.edge_links, mom.edge_moments
+    reps, planes = hand.parts, hand.planes
+    elink, emom = mom.edge_links, mom.edge_moments
+    vlink, vmom = mom.vertex_link, mom.vertex_moments
     pstart, plink, pmom = mom.part_start, mom.part_link, mom.part_moments
-    # The segments: hand face t's boundary runs p -> q.
+    # The segments: hand face t's boundary runs p -> q (its normal and link came with them).
     for k in range(ncross):
-        t = int(segs[k, 0])
-        lk = flink[t]
-        nx, ny, nz = planes[t, 0], planes[t, 1], planes[t, 2]
         px, py, pz = segs[k, 1], segs[k, 2], segs[k, 3]
         qx, qy, qz = segs[k, 4], segs[k, 5], segs[k, 6]
+        nx, ny, nz = segs[k, 7], segs[k, 8], segs[k, 9]
+        lk = int(segs[k, 10])
         c = nx * (py * qz - pz * qy) + ny * (pz * qx - px * qz) + nz * (px * qy - py * qx)
         sx, sy, sz = px + qx, py + qy, pz + qz
         G[lk, 0] += nx * c / 2.0
@@ -170,68 +195,112 @@ def hand_moments(hand_mesh, hand, mom, S, uniform, cnt, rec_e, rec_l, nrec, segs
         G[lk, 3] += (sy * nz - sz * ny) * c / 6.0
         G[lk, 4] += (sz * nx - sx * nz) * c / 6.0
         G[lk, 5] += (sx * ny - sy * nx) * c / 6.0
-    # Whole edges inside, visited as `sums.edge_sum` visits them.
+    # Whole edges from every inside vertex to higher-numbered ones, crossed or not (the
+    # crossed ones are corrected below; an uncrossed one from an inside vertex ends inside,
+    # as `sums.edge_sum` checks): summed per part for parts classified whole, per vertex
+    # (or edge by edge at a seam between links) for the others.
     for p in range(reps.shape[0] - 1):
-        whole = uniform[p]
-        if whole:
-            if S[reps[p, 1]] != 1:
-                continue
-            for j in range(pstart[p], pstart[p + 1]):
-                lk = plink[j]
-                for d in range(6):
-                    G[lk, d] += pmom[j, d]
+        if uniform[p]:
+            if S[reps[p, 1]] == 1:
+                for j in range(pstart[p], pstart[p + 1]):
+                    lk = plink[j]
+                    for d in range(6):
+                        G[lk, d] += pmom[j, d]
+            continue
         for u in range(reps[p, 1], reps[p + 1, 1]):
             if S[u] != 1:
                 continue
-            for k in range(adj_start[u], adj_split[u] if whole else adj_start[u + 1]):
-                e = adj_edge[k]
-                if cnt[e] != 0 or u >= adj_vert[k]:
+            lk = vlink[u]
+            if lk >= 0:
+                for d in range(6):
+                    G[lk, d] += vmom[u, d]
+                continue
+            for k in range(adj_start[u], adj_start[u + 1]):
+                if u >= adj_vert[k]:
                     continue
+                e = adj_edge[k]
                 l1, l2 = elink[e, 0], elink[e, 1]
                 for d in range(6):
                     G[l1, d] += emom[e, d]
                     G[l2, d] += emom[e, 6 + d]
-    # Crossed edges: their inside intervals, as `sums.crossed_sum` finds them.
-    lam = np.empty(8)
+    # Crossed edges: their inside intervals (f, h per crossed edge, in ``fe``, ``ff``,
+    # ``fh``), as `sums.crossed_sum` finds them: the records of edges crossed more than once
+    # gathered in ``multi`` and sorted by edge.
+    fe = np.empty(nrec, np.int64)
+    ff = np.empty(nrec)
+    fh = np.empty(nrec)
+    ne = 0
+    nm = 0
     for i in range(nrec):
         e = rec_e[i]
-        n = cnt[e]
-        if n > 1:
-            # Gathered once, at the edge's first record.
-            first = True
-            for j in range(i):
-                if rec_e[j] == e:
-                    first = False
-                    break
-            if not first:
-                continue
-            if n > lam.shape[0]:
-                lam = np.empty(2 * n)
-            m = 0
-            for j in range(i, nrec):
-                if rec_e[j] == e:
-                    lam[m] = rec_l[j]
-                    m += 1
-            _sort_small(lam, m)
+        if cnt[e] != 1:
+            multi[nm] = i
+            nm += 1
+            continue
+        lam = rec_l[i]
+        fe[ne] = e
+        # Inside from u: [0, lam], less the whole edge the walk above added.
+        if S[E[e, 0]] == 1:
+            ff[ne], fh[ne] = lam - 1.0, lam * lam - 1.0
         else:
-            lam[0] = rec_l[i]
-            m = 1
-        inside = S[E[e, 0]] == 1
-        f = 0.0
-        h = 0.0
-        last = 0.0
-        for j in range(m):
+            ff[ne], fh[ne] = 1.0 - lam, 1.0 - lam * lam
+        ne += 1
+    if nm > 0:
+        key = np.empty(nm, np.int64)
+        for i in range(nm):
+            key[i] = rec_e[multi[i]]
+        order = _order_by_key(key)
+        lams = np.empty(nm)
+        i = 0
+        while i < nm:
+            e = key[order[i]]
+            j = i
+            while j < nm and key[order[j]] == e:
+                lams[j - i] = rec_l[multi[order[j]]]
+                j += 1
+            _sort_small(lams, j - i)
+            inside = S[E[e, 0]] == 1
+            f = 0.0
+            h = 0.0
+            last = 0.0
+            for k in range(j - i):
+                if inside:
+                    f += lams[k] - last
+                    h += lams[k] * lams[k] - last * last
+                last = lams[k]
+                inside = not inside
             if inside:
-                f += lam[j] - last
-                h += lam[j] * lam[j] - last * last
-            last = lam[j]
-            inside = not inside
-        if inside:
-            f += 1.0 - last
-            h += 1.0 - last * last
-        t1, t2 = ET[e, 0], ET[e, 1]
-        _add_share(
-            G, elink[e, 0], elink[e, 1], V, E[e, 0], E[e, 1],
-            planes[t1, 0], planes[t1, 1], planes[t1, 2],
-            planes[t2, 0], planes[t2, 1], planes[t2, 2], f, h,
-        )  # fmt: skip
+                f += 1.0 - last
+                h += 1.0 - last * last
+            if S[E[e, 0]] == 1:
+                f -= 1.0
+                h -= 1.0
+            fe[ne], ff[ne], fh[ne] = e, f, h
+            ne += 1
+            i = j
+    for k in range(ne):
+        e = fe[k]
+        u, v = E[e, 0], E[e, 1]
+        ux, uy, uz, vx, vy, vz = V[u, 0], V[u, 1], V[u, 2], V[v, 0], V[v, 1], V[v, 2]
+        t = ET[e, 0]
+        lk = elink[e, 0]
+        a0, a1, a2, a3, a4, a5 = _share(
+            ux, uy, uz, vx, vy, vz, planes[t, 0], planes[t, 1], planes[t, 2], ff[k], fh[k]
+        )
+        G[lk, 0] += a0
+        G[lk, 1] += a1
+        G[lk, 2] += a2
+        G[lk, 3] += a3
+        G[lk, 4] += a4
+        G[lk, 5] += a5
+        t = ET[e, 1]
+        lk = elink[e, 1]
+        a0, a1, a2, a3, a4, a5 = _share(
+            ux, uy, uz, vx, vy, vz, planes[t, 0], planes[t, 1], planes[t, 2], ff[k], fh[k]
+        )
+        G[lk, 0] -= a0
+        G[lk, 1] -= a1
+        G[lk, 2] -= a2
+        G[lk, 3] -= a3
+        G[lk, 4] -= a4
+        G[lk, 5] -= a5

@@ -144,7 +144,7 @@ def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs,
         np.empty((3, 2), np.int64),
         np.zeros(hand.parts.shape[0] - 1, np.bool_),
         np.empty(longest, np.int64),
-        np.empty((pairs, 7)),
+        np.empty((pairs, 11)),
     )
 
 
@@ -293,7 +293,8 @@ def pose_volumes(
             if code == OK and vol > 0.0 and moments.shape[1] > 0:
                 hand_moments(
                     hand_mesh, hand, mom, scratch.hand_status, scratch.uniform, W.hand_count,
-                    W.hand_rec.edge, W.hand_rec.lam, W.nrec[0], W.segments, ncross, moments[ip],
+                    W.hand_rec.edge, W.hand_rec.lam, W.nrec[0], scratch.multi, W.segments, ncross,
+                    moments[ip],
                 )  # fmt: skip
         codes[ip] = code
         stats[ip, STAT_PAIRS] = npairs

@@ -359,6 +359,8 @@ def trace_pairs(
             segs[ncross, 0] = ft
             segs[ncross, 1], segs[ncross, 2], segs[ncross, 3] = px, py, pz
             segs[ncross, 4], segs[ncross, 5], segs[ncross, 6] = qx, qy, qz
+            segs[ncross, 7], segs[ncross, 8], segs[ncross, 9] = HF[ft, 0], HF[ft, 1], HF[ft, 2]
+            segs[ncross, 10] = HF[ft, 18]
             seg += term
             run += abs(seg)
             segerr += terr + HF[ft, 5] + beta_s
