@@ -27,6 +27,7 @@ from exactgrasp.errors import (
     ModelError,
     NoiseError,
     SamplerError,
+    SeparationError,
 )
 from exactgrasp.geometry import objects
 from exactgrasp.geometry.solid import Solid
@@ -50,6 +51,7 @@ def __getattr__(name: str):
         "read_batch": ("exactgrasp.batch", "read_batch"),
         "intersection_volume": ("exactgrasp.overlap", "intersection_volume"),
         "intersection_gradient": ("exactgrasp.overlap", "intersection_gradient"),
+        "separate": ("exactgrasp.separation", "separate"),
         "show": ("exactgrasp.view", "show"),
     }
     if name in lazy:
@@ -80,6 +82,7 @@ __all__ = [
     "NoiseError",
     "PathSampler",
     "SamplerError",
+    "SeparationError",
     "Solid",
     "__version__",
     "available_backends",
@@ -98,5 +101,6 @@ __all__ = [
     "read_batch",
     "register_backend",
     "run_batch",
+    "separate",
     "show",
 ]

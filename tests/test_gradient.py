@@ -267,3 +267,36 @@ def test_a_pose_apart_has_zero_derivatives():
     result = ExactBackend(n_jobs=1).volume_gradients(grasp, translation(0, 0, 5.0))
     assert result.volumes.tolist() == [0.0]
     assert not result.twist.any() and not result.joints.any()
+
+
+# -- the kernel's moments against the boolean's --------------------------------------------------
+
+REAL = (
+    "barrett-grasps/study-records/CerealBox/obj5_sub4_grasp1_optimal0.json",
+    "barrett-grasps/noise/spray_bottle_study_record.json",
+    "barrett-grasps/study-records/SprayBottle/obj2_sub4_grasp6_optimal0.json",
+)
+
+
+@pytest.mark.parametrize("name", REAL)
+def test_kernel_moments_agree_with_the_boolean(shared_data, name):
+    from exactgrasp.backends.exact.gradients import boolean_volume_moments, volume_moments
+
+    if not (shared_data / name).is_file():
+        pytest.skip(f"{name} not in the shared data")
+    grasp = eg.Grasp.from_file(shared_data / name)
+    rng = np.random.default_rng(3)
+    poses = np.stack(
+        [np.eye(4)] + [exp_se3(rng.normal(0, 0.1, 3), rng.normal(0, 0.2, 3)) for _ in range(8)]
+    )
+    intersector = ExactBackend(n_jobs=1).intersector(grasp)
+    volumes, kernel = volume_moments(intersector, poses)
+    assert set(intersector.pose_sources) == {"kernel"}
+    _, boolean = boolean_volume_moments(intersector, poses)
+    assert np.count_nonzero(volumes) >= 5
+    scale = np.abs(boolean).max(axis=(1, 2), keepdims=True)
+    assert np.all(np.abs(kernel - boolean) <= 1e-12 * scale)
+    # Several links inside, each with its own moments.
+    assert np.count_nonzero(np.abs(kernel[0]).sum(1)) >= 3
+    threaded = ExactBackend(n_jobs=2).intersector(grasp)
+    np.testing.assert_array_equal(volume_moments(threaded, poses)[1], kernel)

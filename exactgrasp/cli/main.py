@@ -24,6 +24,7 @@ from exactgrasp.cli import (
     descriptor,
     inspect,
     overlap,
+    separate,
     show,
     validate,
 )
@@ -34,7 +35,7 @@ from exactgrasp.version import __version__
 __all__ = ["COMMANDS", "build_parser", "main"]
 
 #: The sub-command modules, in the order ``exactgrasp --help`` lists them.
-COMMANDS = (demo, descriptor, compare, close, inspect, show, overlap, validate, batch)
+COMMANDS = (demo, descriptor, compare, close, separate, inspect, show, overlap, validate, batch)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -12,10 +12,14 @@ The method (see ``docs/exact-backend.md``):
 3. Every geometric decision is an orientation sign with a certified error bound; a pose where
    any sign is uncertain is recomputed with a plain manifold3d boolean. Volumes therefore agree
    with the plain boolean to rounding (about 1e-14 relative, see `reference.agrees`).
+4. Where asked (`volume_moments`), the same pass also sums each link's surface moments, which
+   give the volume's derivatives (`moments`, `moment_sums`).
 
-Its options follow the exact backend's rules (`options.check_options`). Imports numpy,
-`backends.base`, `backends.defaults`, `errors`, `geometry.bvh`, `geometry.manifold` and this
-package's modules below `backend`.
+Long because one class holds the build, the pose loop over threads and the fallback, for the
+volumes and their moments alike. Its options follow the exact backend's rules
+(`options.check_options`). Imports numpy, `backends.base`, `backends.defaults`, `errors`,
+`geometry.bvh`, `geometry.manifold` and this package's modules below `backend` and
+`gradients`.
 """
 
 from __future__ import annotations
