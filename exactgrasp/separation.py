@@ -110,9 +110,7 @@ def _bracket(backend, grasp, pose, xi, tol) -> float:
     return hi
 
 
-def in_contact(
-    grasp: Grasp, direction: np.ndarray, backend: ExactBackend | None = None
-) -> bool:
+def in_contact(grasp: Grasp, direction: np.ndarray, backend: ExactBackend | None = None) -> bool:
     """Whether the grasp is in contact: its exact volume reads 0, and moving the object
     `PUSH_MM` back along ``direction`` (a twist, canonical frame, separating sense)
     penetrates."""
@@ -198,7 +196,8 @@ def separate(
             raise SeparationError(
                 f"grasp {grasp.name!r}: still {volume / scale**3:.3g} m^3 inside after "
                 f"{max_steps} steps; the hand may hold the object in a way no small rigid "
-                "motion undoes (try fingers='reclose', --reclose on the command line, or a larger max_steps)."
+                "motion undoes (try fingers='reclose', --reclose on the command line, or a "
+                "larger max_steps)."
             )
         wg = weights * g
         gg = float(g @ wg)
@@ -206,7 +205,8 @@ def separate(
             raise SeparationError(
                 f"grasp {grasp.name!r}: the object is enclosed by the hand (or the hand by "
                 "the object): the volume's gradient vanishes, so no rigid motion sheds "
-                "volume to first order; try fingers='reclose', --reclose on the command line to open the fingers."
+                "volume to first order; try fingers='reclose' (--reclose on the command line) "
+                "to open the fingers."
             )
         xi = -volume * wg / gg
         big = max(np.linalg.norm(xi[:3]), np.linalg.norm(xi[3:])) / MAX_STEP
