@@ -8,7 +8,7 @@ from where they land until the volume reads exactly 0; the last one, which cross
 contact, is bisected on the exact volume until the object sits within ``tolerance_mm`` of the
 hand along it. Optionally the fingers open first and close again after (`close_fingers`), for
 grasps whose fingers are buried in the object. Nothing is random: the same grasp gives the
-same result. See ``docs/separation.md``.
+same result. See ``docs/penetration-volume.md``.
 
 Imports numpy, `errors`, `backends` (the exact backend), `geometry.se3` and `grasp`.
 """

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
@@ -11,6 +13,8 @@ import exactgrasp as eg
 from exactgrasp.backends.exact import ExactBackend
 from exactgrasp.geometry.se3 import exp_se3
 from tests.conftest import box_arrays
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def translation(x=0.0, y=0.0, z=0.0) -> np.ndarray:
@@ -138,18 +142,17 @@ def test_apart_and_touching_poses_have_zero_gradient():
     assert np.all(eg.intersection_gradient(a, b, poses) == 0)
 
 
-def test_pushing_a_sphere_out_of_a_box_by_gradient_steps():
-    # The docs' example: step against the translation gradient until the volume reads 0.
-    box = box_arrays([-0.05, -0.05, -0.05], [0.05, 0.05, 0.05])
-    sphere = trimesh.creation.icosphere(subdivisions=2, radius=0.02)
-    pose = translation(0.04, 0.01, 0.0)
-    steps = 0
-    while eg.intersection_volume(box, sphere, pose) > 0:
-        g = eg.intersection_gradient(box, sphere, pose)[:3]
-        pose[:3, 3] -= 0.005 * g / np.linalg.norm(g)
-        steps += 1
+def test_the_docs_example_runs(capsys):
+    # The example of docs/penetration-volume.md ("Derivatives"), run as it is written there.
+    text = (ROOT / "docs" / "penetration-volume.md").read_text()
+    block = text.split("<!-- gradient-example -->\n```python\n", 1)[1].split("```", 1)[0]
+    scope: dict = {}
+    exec(compile(block, "penetration-volume.md", "exec"), scope)
+    pose, steps = scope["pose"], scope["steps"]
     assert 1 <= steps <= 10
     assert pose[0, 3] >= 0.05 + 0.0199  # pushed out along +x, the nearest way out
+    assert abs(pose[1, 3] - 0.01) < 1e-9 and abs(pose[2, 3]) < 1e-9
+    assert str(steps) in capsys.readouterr().out
 
 
 # -- central differences on real grasps ---------------------------------------------------------
