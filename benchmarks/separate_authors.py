@@ -12,7 +12,7 @@ Batch (``--batch``): ``separate`` over every raw record of ``study-records/index
 success rate (separated and in contact) and seconds per record, written as it goes.
 
     python benchmarks/separate_authors.py [--fingers reclose] [--json out.json]
-    python benchmarks/separate_authors.py --batch [--limit N] [--json out.json]
+    python benchmarks/separate_authors.py --batch [--every N] [--limit N] [--json out.json]
 
 Needs the shared data folder; skips with a message when it is absent.
 """
@@ -121,13 +121,13 @@ def compare(data: Path, fingers: str, out: Path | None) -> None:
     )
 
 
-def batch(data: Path, fingers: str, limit: int | None, out: Path | None) -> None:
+def batch(data: Path, fingers: str, limit: int | None, every: int, out: Path | None) -> None:
     import exactgrasp as eg
 
     with open(data / RAW / "index.csv") as fh:
         records = [(r["object"], r["record"]) for r in csv.DictReader(fh)]
     rows = []
-    for obj, record in records[:limit]:
+    for obj, record in records[::every][:limit]:
         t0 = time.perf_counter()
         row = {"object": obj, "record": record}
         try:
@@ -153,13 +153,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--fingers", default="reclose", choices=("keep", "reclose"))
     ap.add_argument("--batch", action="store_true")
     ap.add_argument("--limit", type=int, default=None)
+    ap.add_argument("--every", type=int, default=1, help="batch: every N-th record only")
     add_data_options(ap)
     args = ap.parse_args(argv)
     data = data_or_skip(args, f"{RAW}/index.csv")
     if data is None:
         return 0
     if args.batch:
-        batch(data, args.fingers, args.limit, args.json)
+        batch(data, args.fingers, args.limit, args.every, args.json)
     else:
         compare(data, args.fingers, args.json)
     return 0
