@@ -64,7 +64,8 @@ class Separation:
     steps : int
         Gradient steps taken.
     direction : numpy.ndarray, shape (6,)
-        The separating direction: the last step's unit twist (canonical frame, ``(v, ω)``).
+        The separating direction: the last step's unit twist (canonical frame, ``(v, ω)``),
+        or, where no step was needed, the one down the input grasp's volume gradient.
     """
 
     grasp: Grasp
@@ -179,13 +180,19 @@ def separate(
         )
     backend = backend or ExactBackend()
     scale = grasp.frame.scale
-    before = float(_volumes(backend, grasp, np.eye(4)[None])[0]) / scale**3
+    start = backend.volume_gradients(grasp, np.eye(4)[None])
+    before = float(start.volumes[0]) / scale**3
+    weights = _metric(rotation)
+    # Until a step is taken (the open hand may be clear already), the direction that sheds
+    # the input grasp's volume fastest separates it.
+    direction = -weights * start.twist[0]
+    if not np.any(direction):
+        direction = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
+    direction = direction / _norm(direction)
     work = grasp
     if fingers == "reclose" and grasp.hand.joint_names:
         work = Grasp(_opened(grasp), grasp.object, grasp.object_pose, name=grasp.name)
-    weights = _metric(rotation)
     pose = np.eye(4)
-    direction = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
     steps = 0
     while True:
         result = backend.volume_gradients(work, pose[None])

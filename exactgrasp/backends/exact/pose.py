@@ -124,9 +124,10 @@ def _cell_stats(stats, ip, parts, uniform, AS):
 
 
 @inner(nogil=True, error_model="numpy")
-def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows):
+def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows, segs):
     """The search's scratch arrays (`tables.Workspace`): ``cap`` crossings per mesh, a pair
-    table of ``pairs`` slots (a power of two), ``rows`` seed rows."""
+    table of ``pairs`` slots (a power of two), ``rows`` seed rows, and room for the traced
+    segments where ``segs`` (else none: volumes only)."""
     acs, bcs = hand_grid.cell_start, object_grid.cell_start
     longest = max(1, np.max(acs[1:] - acs[:-1]), np.max(bcs[1:] - bcs[:-1]))
     return Workspace(
@@ -144,7 +145,7 @@ def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs,
         np.empty((3, 2), np.int64),
         np.zeros(hand.parts.shape[0] - 1, np.bool_),
         np.empty(longest, np.int64),
-        np.empty((pairs, 11)),
+        np.empty((pairs if segs else 0, 11)),
     )
 
 
@@ -226,7 +227,8 @@ def pose_volumes(
     AV = hand_mesh.vertices
     BV0, BF = object_mesh.vertices, object_mesh.faces
     pairs, rows = PAIR_TABLE, SEED_ROWS
-    work = _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows)
+    segs = moments.shape[1] > 0
+    work = _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows, segs)
     scratch = _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, work)
     W = scratch.work
     token = -1
@@ -272,7 +274,9 @@ def pose_volumes(
                 pairs *= 2
             # A table was too small: the pose starts again with larger ones.
             _clear_records(W)
-            W = _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows)
+            W = _workspace(
+                hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows, segs
+            )
             scratch = PoseScratch(
                 scratch.object_V, scratch.object_D, scratch.object_N, scratch.hand_status,
                 scratch.object_status, scratch.uniform, scratch.queue, scratch.multi,

@@ -153,6 +153,7 @@ def trace_pairs(
     nx = ny = nz = sd = eps_s = tol_e = beta_s = 0.0
     px = py = pz = qx = qy = qz = 0.0
     segs = W.segments
+    keep = segs.shape[0] > 0
     for k in range(nseeds):
         ft, s = seeds[k, 0], seeds[k, 1]
         chained = False
@@ -355,12 +356,13 @@ def trace_pairs(
                     return seg, segerr, ncross, npairs, DEGENERATE
                 break
             tags[h] = tag + 1
-            # The segment, for the derivatives (fewer crossings than pairs in the table).
-            segs[ncross, 0] = ft
-            segs[ncross, 1], segs[ncross, 2], segs[ncross, 3] = px, py, pz
-            segs[ncross, 4], segs[ncross, 5], segs[ncross, 6] = qx, qy, qz
-            segs[ncross, 7], segs[ncross, 8], segs[ncross, 9] = HF[ft, 0], HF[ft, 1], HF[ft, 2]
-            segs[ncross, 10] = HF[ft, 18]
+            if keep:
+                # The segment, for the derivatives (fewer crossings than pairs in the table).
+                segs[ncross, 0] = ft
+                segs[ncross, 1], segs[ncross, 2], segs[ncross, 3] = px, py, pz
+                segs[ncross, 4], segs[ncross, 5], segs[ncross, 6] = qx, qy, qz
+                segs[ncross, 7], segs[ncross, 8] = HF[ft, 0], HF[ft, 1]
+                segs[ncross, 9], segs[ncross, 10] = HF[ft, 2], HF[ft, 18]
             seg += term
             run += abs(seg)
             segerr += terr + HF[ft, 5] + beta_s

@@ -264,7 +264,8 @@ class Workspace(NamedTuple):
     #: (longest cell list of either grid,) int64: the listed faces of a cell that pass the box
     #: filters.
     survivors: np.ndarray
-    #: (pair table size, 11) float64: per crossing pair of the pose, in the order traced, its
+    #: (pair table size, 11) float64, or (0, 11) for volumes only: per crossing pair of the
+    #: pose, in the order traced, its
     #: hand face, its segment's ends p, q (directed along ``n_t × n_s``), the hand face's unit
     #: normal and link: what the volume's derivatives integrate over (`moment_sums`).
     segments: np.ndarray
