@@ -303,3 +303,22 @@ def test_kernel_moments_agree_with_the_boolean(shared_data, name):
     assert np.count_nonzero(np.abs(kernel[0]).sum(1)) >= 3
     threaded = ExactBackend(n_jobs=2).intersector(grasp)
     np.testing.assert_array_equal(volume_moments(threaded, poses)[1], kernel)
+
+
+def test_coupled_slide_joints_of_the_gripper_in_closed_form():
+    # The built-in gripper: finger 1 slides along +y, finger 2 (its mimic) along -y. A box
+    # between them, 5 mm into each finger: opening by dq sheds both overlaps' faces,
+    # 20 mm x 30 mm each, so dV/dq = -2 * 0.02 * 0.03 m^3 per metre (times scale^3 in
+    # canonical units).
+    hand = eg.hands.parallel_gripper().with_joints({"finger_1_joint": 0.03})
+    lo, hi = hand.link_arrays()[1][0].min(0), hand.link_arrays()[1][0].max(0)
+    assert np.allclose([lo[1], lo[0], hi[0], lo[2]], [0.03, -0.01, 0.01, 0.0])
+    box = eg.Solid(*box_arrays([-0.02, -0.035, 0.01], [0.02, 0.035, 0.04]))
+    grasp = eg.Grasp(hand, box, name="gripper")
+    result = ExactBackend(n_jobs=1).volume_gradients(grasp, np.eye(4))
+    assert result.joint_names == ("finger_1_joint",)
+    s = grasp.frame.scale
+    np.testing.assert_allclose(result.joints[0, 0], -2 * 0.02 * 0.03 * s**3, rtol=1e-12)
+    assert result.volumes[0] == pytest.approx(2 * 0.02 * 0.005 * 0.03 * s**3, rel=1e-12)
+    # Symmetric: no net push on the box.
+    assert np.abs(result.twist[0, :3]).max() <= 1e-12 * 0.02 * 0.03 * s**2
