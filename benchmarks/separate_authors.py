@@ -12,7 +12,7 @@ Batch (``--batch``): ``separate`` over every raw record of ``study-records/index
 every N-th, ``--every N``); its success rate (separated and in contact) and seconds per
 record, written as it goes. FoodClip's open mesh is repaired on loading.
 
-    python benchmarks/separate_authors.py [--fingers reclose] [--json out.json]
+    python benchmarks/separate_authors.py [--fingers reclose] [--no-rotation] [--json out.json]
     python benchmarks/separate_authors.py --batch [--every N] [--limit N] [--json out.json]
 
 Needs the shared data folder; skips with a message when it is absent.
@@ -62,7 +62,7 @@ def joint_difference(a, b) -> float:
     return max(abs(a.hand.joints[n] - b.hand.joints[n]) for n in a.hand.joint_names)
 
 
-def compare(data: Path, fingers: str, out: Path | None) -> None:
+def compare(data: Path, fingers: str, rotation: bool, out: Path | None) -> None:
     import numpy as np
 
     import exactgrasp as eg
@@ -73,7 +73,7 @@ def compare(data: Path, fingers: str, out: Path | None) -> None:
         raw = eg.Grasp.from_file(data / RAW / "CerealBox" / f"{raw_name(path.stem)}.json")
         t0 = time.perf_counter()
         try:
-            result = eg.separate(raw, fingers=fingers)
+            result = eg.separate(raw, fingers=fingers, rotation=rotation)
         except eg.SeparationError as exc:
             rows.append({"grasp": path.stem, "error": str(exc)})
             print(f"{path.stem}: refused: {exc}")
@@ -156,6 +156,9 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fingers", default="reclose", choices=("keep", "reclose"))
     ap.add_argument("--batch", action="store_true")
+    ap.add_argument(
+        "--rotation", action=argparse.BooleanOptionalAction, default=True, help="comparison"
+    )
     ap.add_argument("--limit", type=int, default=None)
     ap.add_argument("--every", type=int, default=1, help="batch: every N-th record only")
     add_data_options(ap)
@@ -166,7 +169,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.batch:
         batch(data, args.fingers, args.limit, args.every, args.json)
     else:
-        compare(data, args.fingers, args.json)
+        compare(data, args.fingers, args.rotation, args.json)
     return 0
 
 
