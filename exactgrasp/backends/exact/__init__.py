@@ -4,10 +4,12 @@ Modules by stage: `reference` (the plain boolean, the agreement rule), `intersec
 array-level core), `backend` (the `Backend`), `tables` (the kernel's named tables), `grids` and
 `prepare` (built once per grasp), `pose` (the per-pose driver) with its stages `seeds`,
 `search`, `pairs`, `classify` and `sums`, on `cells` and `predicates`; every tolerance in
-`tolerances`.
+`tolerances`; the volume's derivatives in `moments` (what they are, the boolean reference),
+`moment_sums` (in the kernel) and `gradients` (`VolumeGradients`).
 """
 
 from exactgrasp.backends.exact.backend import ExactBackend
+from exactgrasp.backends.exact.gradients import VolumeGradients
 from exactgrasp.backends.exact.intersector import ExactIntersector, repeated_poses
 from exactgrasp.backends.exact.reference import FLOOR, RTOL, agrees, plain_error, plain_volumes
 
@@ -16,6 +18,7 @@ __all__ = [
     "RTOL",
     "ExactBackend",
     "ExactIntersector",
+    "VolumeGradients",
     "agrees",
     "plain_error",
     "plain_volumes",
