@@ -55,8 +55,9 @@ def staged_kernel():
     @njit(nogil=True, error_model="numpy")
     def run(poses, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap, upto):
         work = P._workspace(
-            hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, P.PAIR_TABLE, P.SEED_ROWS
-        )
+            hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, P.PAIR_TABLE,
+            P.SEED_ROWS, False,
+        )  # fmt: skip
         scratch = P._scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, work)
         W = scratch.work
         out = np.zeros(poses.shape[0])

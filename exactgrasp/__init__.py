@@ -29,6 +29,7 @@ from exactgrasp.errors import (
     ModelError,
     NoiseError,
     SamplerError,
+    SeparationError,
     UncertainCrossingError,
 )
 from exactgrasp.lazy import lazy_names
@@ -82,7 +83,8 @@ __getattr__, __dir__ = lazy_names(
         "exactgrasp.grasp.closing": ("close_fingers",),
         "exactgrasp.compare": ("compare_backends",),
         "exactgrasp.batch": ("run_batch", "read_batch"),
-        "exactgrasp.overlap": ("intersection", "intersection_volume"),
+        "exactgrasp.overlap": ("intersection", "intersection_gradient", "intersection_volume"),
+        "exactgrasp.separation": ("separate",),
         "exactgrasp.view": ("show",),
     },
     {"hands": "exactgrasp.hands", "objects": "exactgrasp.geometry.objects"},
@@ -111,6 +113,7 @@ __all__ = [
     "NoiseError",
     "PathSampler",
     "SamplerError",
+    "SeparationError",
     "Solid",
     "UncertainCrossingError",
     "__version__",
@@ -122,6 +125,7 @@ __all__ = [
     "get_backend",
     "hands",
     "intersection",
+    "intersection_gradient",
     "intersection_volume",
     "joint_noise",
     "object_pose_noise",
@@ -130,5 +134,6 @@ __all__ = [
     "read_batch",
     "register_backend",
     "run_batch",
+    "separate",
     "show",
 ]

@@ -263,6 +263,11 @@ class ClosingError(ExactGraspError, ValueError):
     """Fingers cannot be closed: bad options, a penetrating open hand, an object out of reach."""
 
 
+class SeparationError(ExactGraspError, ValueError):
+    """A penetrating grasp cannot be separated: the object enclosed by the hand, or no motion
+    found within the limits."""
+
+
 class DataError(ExactGraspError, FileNotFoundError):
     """The shared data folder is missing or incomplete."""
 

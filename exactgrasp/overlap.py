@@ -19,11 +19,12 @@ import trimesh
 from exactgrasp.backends import defaults
 from exactgrasp.backends.base import check_poses
 from exactgrasp.backends.exact import ExactIntersector
+from exactgrasp.backends.exact.gradients import object_twist, volume_moments
 from exactgrasp.errors import BackendError, Fix, MeshError
 from exactgrasp.geometry.intake import UNITS, unit_scale
 from exactgrasp.geometry.solid import Solid
 
-__all__ = ["Overlap", "as_solid", "intersection", "intersection_volume"]
+__all__ = ["Overlap", "as_solid", "intersection", "intersection_gradient", "intersection_volume"]
 
 #: What `as_solid` takes, for messages.
 ACCEPTED = (
@@ -167,6 +168,26 @@ class Overlap:
     bounds: Any
 
 
+def _setup(a, b, poses, units, repair, check_scale, broadphase, n_jobs):
+    """The checked inputs of `intersection_volume` and `intersection_gradient`: (whether one
+    pose was given, the poses (..., 4, 4), the intersector or None for no poses)."""
+    units_a, units_b = _units_pair(units)
+    if not isinstance(repair, bool | np.bool_):
+        raise MeshError(f"repair must be True or False, got {repair!r}.")
+    single = poses is None
+    arr = check_poses(np.eye(4) if single else poses, name="poses")
+    single = single or arr.ndim == 2
+    library = _broadphase(broadphase, arr.size // 16)
+    A = as_solid(a, "a", units=units_a, repair=bool(repair), check_scale=check_scale)
+    B = as_solid(b, "b", units=units_b, repair=bool(repair), check_scale=check_scale)
+    if arr.size == 0:
+        return single, arr, None
+    intersector = ExactIntersector(
+        [(A.vertices, A.faces)], [(B.vertices, B.faces)], broadphase=library, n_jobs=n_jobs
+    )
+    return single, arr, intersector
+
+
 def intersection_volume(
     a: Any, b: Any, poses: Any = None, backend: str = "exact", **options: Any
 ) -> Any:
@@ -252,23 +273,61 @@ def intersection(
         unknown ``backend`` or ``broadphase``, a bad ``n_jobs``.
     """
     _check_backend(backend)
-    units_a, units_b = _units_pair(units)
-    if not isinstance(repair, bool | np.bool_):
-        raise MeshError(f"repair must be True or False, got {repair!r}.")
-    single = poses is None
-    arr = check_poses(np.eye(4) if single else poses, name="poses")
-    single = single or arr.ndim == 2
-    library = _broadphase(broadphase, arr.size // 16)
-    A = as_solid(a, "a", units=units_a, repair=bool(repair), check_scale=check_scale)
-    B = as_solid(b, "b", units=units_b, repair=bool(repair), check_scale=check_scale)
-    if arr.size == 0:
+    single, arr, intersector = _setup(a, b, poses, units, repair, check_scale, broadphase, n_jobs)
+    if intersector is None:
         empty = np.zeros(arr.shape[:-2])
         return Overlap(empty, empty.copy())
-    intersector = ExactIntersector(
-        [(A.vertices, A.faces)], [(B.vertices, B.faces)], broadphase=library, n_jobs=n_jobs
-    )
     result = intersector.intersect(arr)
     volumes, bounds = result.volumes, result.volume_bounds
     if single:
         volumes, bounds = float(volumes), float(bounds)
     return Overlap(volumes, bounds)
+
+
+def intersection_gradient(
+    a: Any,
+    b: Any,
+    poses: Any = None,
+    *,
+    units: str | tuple[str, str] = "m",
+    repair: bool = False,
+    check_scale: bool = True,
+    broadphase: str | None = defaults.OVERLAP_BROADPHASE,
+    n_jobs: int = defaults.OVERLAP_N_JOBS,
+) -> np.ndarray:
+    """Derivative of the exact volume of ``a`` ∩ ``b`` by a rigid motion of ``b``.
+
+    For each pose, ``d/dε volume(a ∩ exp(ε ξ̂) · pose · b)`` at ε = 0, as the vector ``g``
+    with ``g · ξ`` that rate for every twist ``ξ = (vx, vy, vz, ωx, ωy, ωz)``: a spatial
+    twist in ``a``'s coordinates (metres), applied on the left of the pose, moving a point
+    ``x`` at ``v + ω × x``. It is ``(∫ n dA, ∫ x × n dA)`` over the part of ``b``'s moved
+    boundary inside ``a`` (``n`` its outward normal): ``-g[:3]`` is the direction along which
+    translating ``b`` sheds volume fastest. Exact to the rounding of the surfaces it is
+    integrated over (see ``docs/exact-backend.md``, "Derivatives").
+
+    A pose whose volume reads 0 (apart, touching, or an overlap below the volume's certified
+    bound) has gradient 0. At contact the derivative is one-sided: pushing in raises the
+    volume, pulling out leaves it 0; the 0 reported is the outward one.
+
+    Parameters
+    ----------
+    a, b, poses, units, repair, check_scale, broadphase, n_jobs
+        As for `intersection_volume`.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (6,) when ``poses`` is None or one (4, 4) pose, else ``poses.shape[:-2] + (6,)``:
+        m^2 per metre of ``v`` (first three), m^3 per radian of ``ω`` (last three).
+
+    Raises
+    ------
+    MeshError, BackendError
+        As for `intersection_volume`.
+    """
+    single, arr, intersector = _setup(a, b, poses, units, repair, check_scale, broadphase, n_jobs)
+    if intersector is None:
+        return np.zeros((*arr.shape[:-2], 6))
+    _, links = volume_moments(intersector, arr)
+    twist = object_twist(links)
+    return twist.reshape(6) if single else twist

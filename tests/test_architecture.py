@@ -36,6 +36,7 @@ LAYERS = {
     "diagnostics": 5,
     "descriptor": 6,
     "overlap": 6,
+    "separation": 6,
     "view": 6,
     "compare": 7,
     "batch": 8,

@@ -22,6 +22,7 @@ from exactgrasp.cli import (
     evaluate,
     inspect,
     overlap,
+    separate,
     show,
     validate,
 )
@@ -32,7 +33,19 @@ from exactgrasp.version import __version__
 __all__ = ["COMMANDS", "build_parser", "main"]
 
 #: The sub-command modules, in the order ``exactgrasp --help`` lists them.
-COMMANDS = (demo, descriptor, compare, close, inspect, show, overlap, validate, batch, evaluate)
+COMMANDS = (
+    demo,
+    descriptor,
+    compare,
+    close,
+    separate,
+    inspect,
+    show,
+    overlap,
+    validate,
+    batch,
+    evaluate,
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

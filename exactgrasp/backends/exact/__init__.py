@@ -4,7 +4,8 @@ Modules by stage: `reference` (the plain boolean, the agreement rule), `intersec
 array-level core), `backend` (the `Backend`), `tables` (the kernel's named tables), `grids` and
 `prepare` (built once per grasp), `pose` (the per-pose driver) with its stages `seeds`,
 `search`, `pairs`, `classify` and `sums`, on `cells` and `predicates`; every tolerance in
-`tolerances`.
+`tolerances`; the volume's derivatives in `moments` (what they are, the boolean reference),
+`moment_sums` (in the kernel) and `gradients` (`VolumeGradients`).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from exactgrasp.lazy import lazy_names
 
 if TYPE_CHECKING:
     from exactgrasp.backends.exact.backend import ExactBackend
+    from exactgrasp.backends.exact.gradients import VolumeGradients
     from exactgrasp.backends.exact.intersector import (
         ExactIntersector,
         Intersection,
@@ -26,6 +28,7 @@ __getattr__, __dir__ = lazy_names(
     __name__,
     {
         "exactgrasp.backends.exact.backend": ("ExactBackend",),
+        "exactgrasp.backends.exact.gradients": ("VolumeGradients",),
         "exactgrasp.backends.exact.intersector": (
             "ExactIntersector",
             "Intersection",
@@ -47,6 +50,7 @@ __all__ = [
     "ExactBackend",
     "ExactIntersector",
     "Intersection",
+    "VolumeGradients",
     "agrees",
     "plain_error",
     "plain_volumes",

@@ -17,6 +17,7 @@ from exactgrasp.cache import LRUCache
 from exactgrasp.geometry.bvh import require_engine
 
 if TYPE_CHECKING:
+    from exactgrasp.backends.exact.gradients import VolumeGradients
     from exactgrasp.backends.exact.intersector import ExactIntersector
     from exactgrasp.grasp import Grasp
 
@@ -112,3 +113,35 @@ class ExactBackend(Backend):
         """The volume of the union of the hand's links the intersector built, in cubed
         canonical units (equal to `Grasp.canonical_hand_volume` to manifold3d's rounding)."""
         return self.intersector(grasp).hand_volume
+
+    def volume_gradients(self, grasp: Grasp, poses: np.ndarray) -> VolumeGradients:
+        """Volumes of hand ∩ moved object and their derivatives by a rigid motion of the
+        object and by the hand's joints.
+
+        Parameters
+        ----------
+        grasp : Grasp
+        poses : numpy.ndarray, shape (n, 4, 4) or (4, 4)
+            Rigid motions of the object in the canonical frame, as for `volumes`.
+
+        Returns
+        -------
+        VolumeGradients
+            ``volumes`` (n,), ``twist`` (n, 6), ``joints`` (n, k) and ``joint_names`` (k);
+            a single (4, 4) pose counts as n = 1. See `VolumeGradients` for the conventions
+            and ``docs/exact-backend.md`` ("Derivatives").
+        """
+        arr = check_poses(poses)
+        flat = arr.reshape(-1, 4, 4)
+        from exactgrasp.backends.exact.gradients import (
+            VolumeGradients,
+            object_twist,
+            volume_moments,
+        )
+        from exactgrasp.hands.twists import link_twists
+
+        volumes, links = volume_moments(self.intersector(grasp), flat)
+        names, twists = link_twists(grasp.hand)
+        # dV/dq_j = Σ_l ξ_jl · (F_l, M_l): the hand's links move, the object stays.
+        joints = np.einsum("jlc,nlc->nj", twists, links)
+        return VolumeGradients(volumes, object_twist(links), joints, names)

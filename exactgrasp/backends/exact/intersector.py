@@ -12,10 +12,13 @@ The method (see ``docs/exact-backend.md``):
 3. Every geometric decision is an orientation sign with a certified error bound; a pose where
    any sign is uncertain is recomputed with a plain manifold3d boolean. Volumes therefore agree
    with the plain boolean to rounding (about 1e-14 relative, see `reference.agrees`).
+4. Where asked (`volume_moments`), the same pass also sums each link's surface moments, which
+   give the volume's derivatives (`moments`, `moment_sums`).
 
-Its options follow the exact backend's rules (`options.check_options`). Long because the
-intersector and its result (`Intersection`) document every table, counter and bound they hold
-next to the code that fills them.
+Long because one class holds the build, the pose loop over threads and the fallback, for the
+volumes and their moments alike, and the intersector and its result (`Intersection`) document
+every table, counter and bound they hold next to the code that fills them. Its options follow
+the exact backend's rules (`options.check_options`).
 """
 
 from __future__ import annotations
@@ -37,7 +40,9 @@ from exactgrasp.backends.exact.culling import (
     shell_labels,
     worth_building,
 )
-from exactgrasp.backends.exact.grids import build_grid, cell_order
+from exactgrasp.backends.exact.grids import build_grid, cell_order, morton_order
+from exactgrasp.backends.exact.moment_sums import empty_moment_tables, moment_tables
+from exactgrasp.backends.exact.moments import boolean_moments, face_origins, shift_moments
 from exactgrasp.backends.exact.options import check_options
 from exactgrasp.backends.exact.pose import pose_volumes
 from exactgrasp.backends.exact.prepare import hand_tables, object_tables, prepare_mesh
@@ -76,6 +81,8 @@ POSE_SOURCES[[OK, CULLED, DEGENERATE, OVERFLOW]] = ("kernel", "culled", "boolean
 PIECES_PER_THREAD = 8
 #: Fewest poses in a piece (a kernel call has a fixed cost of its own).
 PIECE_POSES = 32
+#: The moment tables of a call that wants volumes only.
+EMPTY_MOMENTS = empty_moment_tables()
 
 
 def grid_cell(vertices: np.ndarray, cell: float | None, key: str) -> float:
@@ -194,13 +201,19 @@ class ExactIntersector:
         # too (manifold3d's tolerance grows with the coordinates' magnitude), so that rounding
         # depends on the geometry's size, not on where it lies.
         self.origin = bounds_centre(hand_links)
-        self.hand_solid = union_solids(solids(shifted(hand_links, self.origin), "hand link"))
+        # Each link its own manifold3d original, so that the faces of the union and of any
+        # boolean with it say which link they come from (`moments`).
+        links = [s.as_original() for s in solids(shifted(hand_links, self.origin), "hand link")]
+        self.link_ids = [int(s.original_id()) for s in links]
+        self.hand_solid = union_solids(links)
         self.object_solid = union_solids(
             solids(shifted(object_bodies, self.origin), "object body")
         )
         self.hand_volume = float(self.hand_solid.volume())
         self.object_volume = float(self.object_solid.volume())
         AV, AF = mesh_arrays(self.hand_solid)
+        # The link of each face, in the order `cell_order` gives the faces.
+        face_link = face_origins(self.hand_solid, self.link_ids)[morton_order(AV[AF].mean(1))]
         BV, BF = mesh_arrays(self.object_solid)
         # Cells scale with each mesh (units-free); see defaults.EXACT_CELLS_PER_EXTENT.
         hand_cell = grid_cell(AV, tuning.get("hand_cell"), "hand_cell")
@@ -215,6 +228,9 @@ class ExactIntersector:
         self.tiny = TINY_FACE * scale**4
         self.hand_mesh, self.hand_tables = hand_tables(
             prepare_mesh(AV, AF), self.hand_grid, self.tiny
+        )
+        self.moment_tables = moment_tables(
+            self.hand_mesh, self.hand_tables, face_link, len(self.link_ids)
         )
         self.object_mesh = prepare_mesh(BV, BF)
         self.object_tables = object_tables(self.object_mesh)
@@ -264,10 +280,15 @@ class ExactIntersector:
                     )  # fmt: skip
         return crossing
 
-    def _chunk(self, poses: np.ndarray, crossing: np.ndarray | None = None):
-        """Volumes, bounds, codes and statistics of poses (k, 4, 4) in local coordinates;
-        ``crossing`` (k,) from `broad_phase` culls, None does not."""
+    def _chunk(
+        self, poses: np.ndarray, crossing: np.ndarray | None = None, with_moments: bool = False
+    ):
+        """Volumes, bounds, codes, statistics and link moments (k, L, 6; L = 0 without
+        ``with_moments``) of poses (k, 4, 4) in local coordinates; ``crossing`` (k,) from
+        `broad_phase` culls, None does not."""
         n = len(poses)
+        links = len(self.link_ids) if with_moments else 0
+        moments = np.zeros((n, links, 6))
         out = np.zeros(n)
         bounds = np.zeros(n)
         codes = np.zeros(n, np.int64)
@@ -286,15 +307,21 @@ class ExactIntersector:
             b = np.zeros(len(idx))
             c = np.zeros(len(idx), np.int64)
             st = np.zeros((len(idx), N_STATS), np.int64)
+            mo = np.zeros((len(idx), links, 6))
             pose_volumes(
                 np.ascontiguousarray(poses[idx]), self.hand_mesh, self.hand_tables,
                 self.hand_grid, self.object_mesh, self.object_tables, self.object_grid,
                 self.tiny, self.capacity, o, b, c, st,
+                self.moment_tables if with_moments else EMPTY_MOMENTS, mo,
             )  # fmt: skip
-            out[idx], bounds[idx], codes[idx], stats[idx] = o, b, c, st
+            out[idx], bounds[idx], codes[idx], stats[idx], moments[idx] = o, b, c, st, mo
         for i in np.flatnonzero((codes == DEGENERATE) | (codes == OVERFLOW)):
             out[i], bounds[i] = self._boolean(poses[i])
-        return out, bounds, codes, stats
+            if with_moments and out[i] > 0:
+                moments[i] = boolean_moments(
+                    self.hand_solid, self.link_ids, self.object_solid, poses[i], self.areas
+                )[1]
+        return out, bounds, codes, stats, moments
 
     def _boolean(self, pose: np.ndarray) -> tuple[float, float]:
         """The fallback: manifold3d's volume of hand ∩ moved object, and its error bound.
@@ -356,6 +383,19 @@ class ExactIntersector:
             kernel's poses, 0 for culled ones, manifold3d's tolerance times both areas for
             the boolean's.
         """
+        return self._run(poses, progress, False)[0]
+
+    def volume_moments(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Volumes as `volumes`, and per link ``(∫ n dA, ∫ x × n dA)`` of its boundary inside
+        the moved object, in the input frame: shapes ``poses.shape[:-2]`` and
+        ``poses.shape[:-2] + (L, 6)`` (L links, in input order; zero where the volume reads
+        0). The derivatives they give are in `moments`."""
+        result, moments = self._run(poses, None, True)
+        return result.volumes, shift_moments(moments, self.origin)
+
+    def _run(self, poses, progress, with_moments):
+        """`intersect`'s result, and with ``with_moments`` the link moments (shape
+        ``+ (L, 6)``, local coordinates; else ``+ (0, 6)``)."""
         poses = check_poses(poses)
         t0 = time.perf_counter()
         # The same motions about the local origin c: x -> R x + (R c + t - c); repeats are
@@ -379,12 +419,13 @@ class ExactIntersector:
         bounds = np.empty(n)
         codes = np.empty(n, np.int64)
         stats = np.empty((n, N_STATS), np.int64)
+        moments = np.empty((n, len(self.link_ids) if with_moments else 0, 6))
 
         def run(ix: np.ndarray):
-            return self._chunk(flat[ix], None if crossing is None else crossing[ix])
+            return self._chunk(flat[ix], None if crossing is None else crossing[ix], with_moments)
 
         def store(ix: np.ndarray, result: tuple) -> None:
-            out[ix], bounds[ix], codes[ix], stats[ix] = result
+            out[ix], bounds[ix], codes[ix], stats[ix], moments[ix] = result
             if progress is not None:
                 progress(int(weight[ix].sum()))
 
@@ -415,4 +456,5 @@ class ExactIntersector:
         }
         shape = poses.shape[:-2]
         sources = POSE_SOURCES[codes].reshape(shape)
-        return Intersection(out.reshape(shape), bounds.reshape(shape), sources, stats_out)
+        result = Intersection(out.reshape(shape), bounds.reshape(shape), sources, stats_out)
+        return result, moments[back.reshape(-1)].reshape(*shape, -1, 6)

@@ -3,8 +3,9 @@
 Each pose runs the stages of "Method, per pose" in ``docs/exact-backend.md`` in order: move
 (`move_object`), near runs (`near_pass`), seeds (`seeds.object_edge_seeds`,
 `seeds.cotree_seeds`), pairs
-(`search.trace_pairs`), classify (`classify.classify_vertices`) and sum (`sums.volume_sum`).
-The tables are `tables`' named tuples.
+(`search.trace_pairs`), classify (`classify.classify_vertices`) and sum (`sums.volume_sum`),
+then, where asked, the derivatives' moments (`moment_sums.hand_moments`). The tables are
+`tables`' named tuples.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.backends.exact.classify import classify_vertices
+from exactgrasp.backends.exact.moment_sums import hand_moments
 from exactgrasp.backends.exact.search import trace_pairs
 from exactgrasp.backends.exact.seeds import (
     cotree_seeds,
@@ -121,9 +123,10 @@ def _cell_stats(stats, ip, parts, uniform, AS):
 
 
 @inner(nogil=True, error_model="numpy")
-def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows):
+def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows, segs):
     """The search's scratch arrays (`tables.Workspace`): ``cap`` crossings per mesh, a pair
-    table of ``pairs`` slots (a power of two), ``rows`` seed rows."""
+    table of ``pairs`` slots (a power of two), ``rows`` seed rows, and room for the traced
+    segments where ``segs`` (else none: volumes only)."""
     acs, bcs = hand_grid.cell_start, object_grid.cell_start
     longest = max(1, np.max(acs[1:] - acs[:-1]), np.max(bcs[1:] - bcs[:-1]))
     return Workspace(
@@ -141,6 +144,7 @@ def _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs,
         np.empty((3, 2), np.int64),
         np.zeros(hand.parts.shape[0] - 1, np.bool_),
         np.empty(longest, np.int64),
+        np.empty((pairs if segs else 0, 11)),
     )
 
 
@@ -182,7 +186,7 @@ def _vertex_bound(V):
 @kernel(nogil=True, error_model="numpy")
 def pose_volumes(
     poses, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap,
-    out, bounds, codes, stats,
+    out, bounds, codes, stats, mom, moments,
 ):  # fmt: skip
     """Volume of hand ∩ (pose · object) for each pose; the hand is fixed, the object is in its
     own frame.
@@ -210,6 +214,11 @@ def pose_volumes(
     stats : numpy.ndarray, shape (k, N_STATS), int64
         Face pairs evaluated, crossing pairs, and the hand's parts classified vertex by vertex
         / whole inside / whole outside (columns ``STAT_*``).
+    mom : tables.MomentTables
+        The hand's moment tables, or empty ones (volumes only).
+    moments : numpy.ndarray, shape (k, L, 6), float64
+        Zeros, to which each `OK` pose with a non-zero volume adds the moments of each link's
+        boundary inside the object (`moment_sums.hand_moments`); L = 0: volumes only.
 
     A pose whose pair table or seed buffer fills up (`GROW`) is computed again with both
     doubled: results do not depend on their sizes.
@@ -217,7 +226,8 @@ def pose_volumes(
     AV = hand_mesh.vertices
     BV0, BF = object_mesh.vertices, object_mesh.faces
     pairs, rows = PAIR_TABLE, SEED_ROWS
-    work = _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows)
+    segs = moments.shape[1] > 0
+    work = _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows, segs)
     scratch = _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, work)
     W = scratch.work
     token = -1
@@ -263,7 +273,9 @@ def pose_volumes(
                 pairs *= 2
             # A table was too small: the pose starts again with larger ones.
             _clear_records(W)
-            W = _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows)
+            W = _workspace(
+                hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows, segs
+            )
             scratch = PoseScratch(
                 scratch.object_V, scratch.object_D, scratch.object_N, scratch.hand_status,
                 scratch.object_status, scratch.uniform, scratch.queue, scratch.multi,
@@ -281,6 +293,12 @@ def pose_volumes(
             )
             out[ip] = vol
             bounds[ip] = bound
+            if code == OK and vol > 0.0 and moments.shape[1] > 0:
+                hand_moments(
+                    hand_mesh, hand, mom, scratch.hand_status, scratch.uniform, W.hand_count,
+                    W.hand_rec.edge, W.hand_rec.lam, W.nrec[0], scratch.multi, W.segments, ncross,
+                    moments[ip],
+                )  # fmt: skip
         codes[ip] = code
         stats[ip, STAT_PAIRS] = npairs
         stats[ip, STAT_CROSSING] = ncross

@@ -150,6 +150,9 @@ def trace_pairs(
     sa0 = sa1 = sa2 = sb0 = sb1 = sb2 = sc0 = sc1 = sc2 = 0.0
     smin0 = smin1 = smin2 = smax0 = smax1 = smax2 = 0.0
     nx = ny = nz = sd = eps_s = tol_e = beta_s = 0.0
+    px = py = pz = qx = qy = qz = 0.0
+    segs = W.segments
+    keep = segs.shape[0] > 0
     for k in range(nseeds):
         ft, s = seeds[k, 0], seeds[k, 1]
         chained = False
@@ -345,11 +348,20 @@ def trace_pairs(
                         j = 0 if P[0, 4] == 0.0 else 1
                         exit_row = int(P[j, 5])
                         exit_k = int(P[j, 6])
+                        px, py, pz = P[1 - j, 0], P[1 - j, 1], P[1 - j, 2]
+                        qx, qy, qz = P[j, 0], P[j, 1], P[j, 2]
             if not crossing:
                 if chained:
                     return seg, segerr, ncross, npairs, DEGENERATE
                 break
             tags[h] = tag + 1
+            if keep:
+                # The segment, for the derivatives (fewer crossings than pairs in the table).
+                segs[ncross, 0] = ft
+                segs[ncross, 1], segs[ncross, 2], segs[ncross, 3] = px, py, pz
+                segs[ncross, 4], segs[ncross, 5], segs[ncross, 6] = qx, qy, qz
+                segs[ncross, 7], segs[ncross, 8] = HF[ft, 0], HF[ft, 1]
+                segs[ncross, 9], segs[ncross, 10] = HF[ft, 2], HF[ft, 18]
             seg += term
             run += abs(seg)
             segerr += terr + HF[ft, 5] + beta_s

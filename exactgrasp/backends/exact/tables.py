@@ -146,7 +146,8 @@ class HandTables(NamedTuple):
     #: (m,) float32: `search.plane_err_coef` of each face (rounded up).
     filter_err: np.ndarray
     #: (m, 24) float64: per face, what the pair evaluation reads (`search.trace_pairs`) in three
-    #: cache lines: `planes` (6), its corners' coordinates (9), ``D`` (3), six zeros.
+    #: cache lines: `planes` (6), its corners' coordinates (9), ``D`` (3), the index of the
+    #: link it comes from (`MomentTables.face_link`, set with them), five zeros.
     face_records: np.ndarray
     #: (m, 16) int32: per face its vertices (3), the edges of its corners k -> k + 1 (3), the
     #: faces across those edges (3), whether it owns those edges (3, 0 or 1), four zeros.
@@ -184,6 +185,36 @@ class ObjectTables(NamedTuple):
     edge_part: np.ndarray
     #: (0, 2) float64: empty: no part of the object is summed whole.
     part_weights: np.ndarray
+
+
+class MomentTables(NamedTuple):
+    """What the volume's derivatives read of the fixed hand (`moment_sums.moment_tables`):
+    which link each face comes from, and the moments of whole edges and parts. Empty (no
+    rows) when a call wants volumes only.
+
+    ``m`` faces, ``e`` edges, ``parts`` as in `HandTables`, ``k`` (part, link) entries; the
+    moments are ``(∫ n dA, ∫ x × n dA)`` of a face's piece (`moments`), local coordinates.
+    """
+
+    #: (m,) int64: the link (index into the hand's links) of each face.
+    face_link: np.ndarray
+    #: (e, 2) int64: the links of each edge's faces ``t1`` and ``t2``.
+    edge_links: np.ndarray
+    #: (e, 12) float64: the whole edge's share of ``t1``'s moments (6), then of ``t2``'s (6).
+    edge_moments: np.ndarray
+    #: (n,) int64: the one link of the faces around each vertex, -1 where they come from
+    #: several (a seam between links).
+    vertex_link: np.ndarray
+    #: (n, 6) float64: the summed moments of the whole edges from each vertex to
+    #: higher-numbered ones (where `vertex_link` is not -1).
+    vertex_moments: np.ndarray
+    #: (parts + 1,) int64: CSR start of each part's entries in `part_link`.
+    part_start: np.ndarray
+    #: (k,) int64: the link of each entry.
+    part_link: np.ndarray
+    #: (k, 6) float64: the summed moments, on that link's faces, of the whole edges from the
+    #: part's vertices to higher-numbered ones.
+    part_moments: np.ndarray
 
 
 class Crossings(NamedTuple):
@@ -233,6 +264,11 @@ class Workspace(NamedTuple):
     #: (longest cell list of either grid,) int64: the listed faces of a cell that pass the box
     #: filters.
     survivors: np.ndarray
+    #: (pair table size, 11) float64, or (0, 11) for volumes only: per crossing pair of the
+    #: pose, in the order traced, its
+    #: hand face, its segment's ends p, q (directed along ``n_t × n_s``), the hand face's unit
+    #: normal and link: what the volume's derivatives integrate over (`moment_sums`).
+    segments: np.ndarray
 
 
 class PoseScratch(NamedTuple):

@@ -1,0 +1,177 @@
+"""`separate` against the authors' contact adjustment, and over every raw study record.
+
+Comparison (default): for each of the 34 contact-adjusted cereal-box grasps
+(``barrett-grasps/grasps/obj5_*.json``, "theirs") the raw record it was adjusted from
+(``study-records/CerealBox/<name less _target/_prime>.json``) is separated with
+``separate(raw, fingers=...)`` ("ours"). Per grasp: whether ours is in contact, the object-pose
+difference ours-theirs and raw-theirs (the object's centroid, mm; the relative rotation,
+degrees), the largest joint difference (rad), and the descriptor L2 distance (library
+defaults: the default sampler and backend) ours-theirs against raw-theirs.
+
+Batch (``--batch``): ``separate`` over every raw record of ``study-records/index.csv`` (or
+every N-th, ``--every N``); its success rate (separated and in contact) and seconds per
+record, written as it goes. FoodClip's open mesh is repaired on loading.
+
+    python benchmarks/separate_authors.py [--fingers reclose] [--no-rotation] [--json out.json]
+    python benchmarks/separate_authors.py --batch [--every N] [--limit N] [--json out.json]
+
+Needs the shared data folder; skips with a message when it is absent.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from shared_data import add_data_options, data_or_skip  # noqa: E402
+
+GRASPS = "barrett-grasps/grasps"
+RAW = "barrett-grasps/study-records"
+
+
+def raw_name(adjusted: str) -> str:
+    """The raw record's stem of an adjusted grasp's stem (``..._optimal0_target`` ->
+    ``..._optimal0``)."""
+    for suffix in ("_target", "_prime"):
+        if adjusted.endswith(suffix):
+            return adjusted[: -len(suffix)]
+    return adjusted
+
+
+def pose_difference(a, b) -> tuple[float, float]:
+    """(centroid distance mm, relative rotation degrees) between two grasps' object poses."""
+    import numpy as np
+
+    c = a.object.centroid
+    pa, pb = a.object_pose, b.object_pose
+    d = np.linalg.norm((pa[:3, :3] @ c + pa[:3, 3]) - (pb[:3, :3] @ c + pb[:3, 3]))
+    rel = pa[:3, :3].T @ pb[:3, :3]
+    cos = min(1.0, max(-1.0, (np.trace(rel) - 1) / 2))
+    return float(d * 1e3), math.degrees(math.acos(cos))
+
+
+def joint_difference(a, b) -> float:
+    return max(abs(a.hand.joints[n] - b.hand.joints[n]) for n in a.hand.joint_names)
+
+
+def compare(data: Path, fingers: str, rotation: bool, out: Path | None) -> None:
+    import numpy as np
+
+    import exactgrasp as eg
+
+    rows = []
+    for path in sorted((data / GRASPS).glob("obj5_*.json")):
+        theirs = eg.Grasp.from_file(path)
+        raw = eg.Grasp.from_file(data / RAW / "CerealBox" / f"{raw_name(path.stem)}.json")
+        t0 = time.perf_counter()
+        try:
+            result = eg.separate(raw, fingers=fingers, rotation=rotation)
+        except eg.SeparationError as exc:
+            rows.append({"grasp": path.stem, "error": str(exc)})
+            print(f"{path.stem}: refused: {exc}")
+            continue
+        seconds = time.perf_counter() - t0
+        ours = result.grasp
+        d_raw, d_ours, d_theirs = (eg.compute_descriptor(g) for g in (raw, ours, theirs))
+        row = {
+            "grasp": path.stem,
+            "seconds": seconds,
+            "in_contact": result.in_contact,
+            "moved_mm": result.translation_mm,
+            "turned_deg": result.rotation_deg,
+            "ours_theirs_pose": pose_difference(ours, theirs),
+            "raw_theirs_pose": pose_difference(raw, theirs),
+            "ours_theirs_joint_rad": joint_difference(ours, theirs),
+            "raw_theirs_joint_rad": joint_difference(raw, theirs),
+            "ours_theirs_l2": eg.distance(d_ours, d_theirs),
+            "raw_theirs_l2": eg.distance(d_raw, d_theirs),
+        }
+        rows.append(row)
+        print(
+            f"{path.stem:40s} contact={row['in_contact']} moved {row['moved_mm']:.2f} mm "
+            f"{row['turned_deg']:.2f} deg; pose vs theirs {row['ours_theirs_pose'][0]:.2f} mm "
+            f"{row['ours_theirs_pose'][1]:.2f} deg (raw {row['raw_theirs_pose'][0]:.2f} mm "
+            f"{row['raw_theirs_pose'][1]:.2f} deg); joints {row['ours_theirs_joint_rad']:.3f} "
+            f"(raw {row['raw_theirs_joint_rad']:.3f}) rad; L2 {row['ours_theirs_l2']:.4f} "
+            f"(raw {row['raw_theirs_l2']:.4f}); {seconds:.1f} s",
+            flush=True,
+        )
+        if out:
+            out.write_text(json.dumps(rows, indent=1))
+    done = [r for r in rows if "error" not in r]
+    closer = [r["ours_theirs_l2"] < r["raw_theirs_l2"] for r in done]
+    print(
+        f"{len(done)} of {len(rows)} separated, {sum(r['in_contact'] for r in done)} in contact; "
+        f"ours closer to theirs (descriptor L2) in {sum(closer)} of {len(done)}; mean L2 "
+        f"ours {np.mean([r['ours_theirs_l2'] for r in done]):.4f}, raw "
+        f"{np.mean([r['raw_theirs_l2'] for r in done]):.4f}; median pose difference ours "
+        f"{np.median([r['ours_theirs_pose'][0] for r in done]):.2f} mm "
+        f"{np.median([r['ours_theirs_pose'][1] for r in done]):.2f} deg, raw "
+        f"{np.median([r['raw_theirs_pose'][0] for r in done]):.2f} mm "
+        f"{np.median([r['raw_theirs_pose'][1] for r in done]):.2f} deg; median joint "
+        f"difference ours {np.median([r['ours_theirs_joint_rad'] for r in done]):.3f} rad, raw "
+        f"{np.median([r['raw_theirs_joint_rad'] for r in done]):.3f} rad"
+    )
+
+
+def batch(data: Path, fingers: str, limit: int | None, every: int, out: Path | None) -> None:
+    import exactgrasp as eg
+
+    with open(data / RAW / "index.csv") as fh:
+        records = [(r["object"], r["record"]) for r in csv.DictReader(fh)]
+    rows = []
+    for obj, record in records[::every][:limit]:
+        t0 = time.perf_counter()
+        row = {"object": obj, "record": record}
+        try:
+            # FoodClip.STL is open (the data's README: it had to be closed for its checks).
+            grasp = eg.Grasp.from_file(
+                data / RAW / obj / f"{record}.json", repair=obj == "FoodClip"
+            )
+            result = eg.separate(grasp, fingers=fingers)
+            row.update(in_contact=result.in_contact, moved_mm=result.translation_mm)
+        except eg.ExactGraspError as exc:
+            row["error"] = f"{type(exc).__name__}: {exc}"
+        row["seconds"] = time.perf_counter() - t0
+        rows.append(row)
+        ok = sum(bool(r.get("in_contact")) for r in rows)
+        print(
+            f"{obj}/{record}: {row.get('error') or row['in_contact']} ({row['seconds']:.1f} s); "
+            f"{ok} of {len(rows)} in contact",
+            flush=True,
+        )
+        if out:
+            out.write_text(json.dumps(rows, indent=1))
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--fingers", default="reclose", choices=("keep", "reclose"))
+    ap.add_argument("--batch", action="store_true")
+    ap.add_argument(
+        "--rotation", action=argparse.BooleanOptionalAction, default=True, help="comparison"
+    )
+    ap.add_argument("--limit", type=int, default=None)
+    ap.add_argument("--every", type=int, default=1, help="batch: every N-th record only")
+    add_data_options(ap)
+    args = ap.parse_args(argv)
+    data = data_or_skip(args, f"{RAW}/index.csv")
+    if data is None:
+        return 0
+    if args.batch:
+        batch(data, args.fingers, args.limit, args.every, args.json)
+    else:
+        compare(data, args.fingers, args.rotation, args.json)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
