@@ -557,7 +557,7 @@ def test_fixes_are_spelled_as_flags_from_their_fields():
 HEAVY = ("numba", "trimesh", "scipy", "mujoco", "manifold3d", "matplotlib", "plotly", "dask",
          "coal", "fcl", "pyarrow")  # fmt: skip
 COMMANDS = ("demo", "descriptor", "compare", "close", "inspect", "show", "overlap", "validate",
-            "batch")  # fmt: skip
+            "batch", "separate", "evaluate")  # fmt: skip
 
 
 def test_help_loads_none_of_the_numerical_libraries():

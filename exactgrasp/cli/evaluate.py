@@ -16,6 +16,7 @@ from exactgrasp.cli.common import (
     add_backend,
     add_grasp_options,
     add_sampler,
+    described,
     read_grasp,
     sampler_from_args,
 )
@@ -87,10 +88,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "evaluate",
         help="AUC of descriptor distances on labelled pairs of grasps",
-        description="Read PAIRS (a CSV with columns a,b,label and optionally group; a and b "
-        "are grasp files relative to the CSV, or ids of --manifest; label is same/different or "
-        "a grade), compute the grasps' descriptors and write the AUC of each distance and "
-        "baseline with a bootstrap interval, the ROC curves and a per-group breakdown.",
+        description=described(
+            "Read PAIRS (a CSV with columns a,b,label and optionally group; a and b are grasp "
+            "files relative to the CSV, or ids of --manifest; label is same/different or a "
+            "grade), compute the grasps' descriptors and write the AUC of each distance and "
+            "baseline with a bootstrap interval, the ROC curves and a per-group breakdown.",
+            "exactgrasp evaluate pairs.csv -o evaluation --backend voxel",
+        ),
     )
     parser.add_argument("pairs", metavar="PAIRS", help="CSV of labelled pairs")
     parser.add_argument("-o", "--output", required=True, help="output folder")

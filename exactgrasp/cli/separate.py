@@ -12,14 +12,15 @@ import argparse
 import json
 from typing import Any
 
-from exactgrasp.cli.common import add_grasp_options, grasp_from_args
-from exactgrasp.separation import PUSH_MM, separate
+from exactgrasp.cli.common import add_grasp_options, described, grasp_from_args
 
 __all__ = ["add_parser", "cmd_separate"]
 
 
 def cmd_separate(args: argparse.Namespace) -> int:
     """Handler of ``exactgrasp separate``; prints what it did, returns 0."""
+    from exactgrasp.separation import PUSH_MM, separate
+
     grasp = grasp_from_args(args)
     result = separate(
         grasp,
@@ -60,10 +61,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "separate",
         help="move a penetrating object out of the hand by the smallest rigid motion",
-        description="Move GRASP's object out of the hand by gradient steps on the exact "
-        "intersection volume until it reads 0, leaving the object within --tolerance-mm of "
-        "the hand (in contact). With --reclose the fingers open first and close onto the "
-        "object again. Refuses (exit status 2) when the object is enclosed by the hand.",
+        description=described(
+            "Move GRASP's object out of the hand by gradient steps on the exact intersection "
+            "volume until it reads 0, leaving the object within --tolerance-mm of the hand (in "
+            "contact). With --reclose the fingers open first and close onto the object again. "
+            "Refuses (exit status 2) when the object is enclosed by the hand.",
+            "exactgrasp separate grasp.json -o separated.json --reclose",
+        ),
     )
     parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file")
     parser.add_argument("-o", "--output", required=True, help="separated grasp JSON file to write")
