@@ -76,14 +76,7 @@ def _tri_tri(V, F, ident, t, u, skip_shared, flat_check, X, out):
         for ax in range(3):
             X[k, ax] = V[F[t, k], ax]
             X[k + 3, ax] = V[F[u, k], ax]
-    ext = 0.0
-    for ax in range(3):
-        lo = X[0, ax]
-        hi = lo
-        for k in range(1, 6):
-            lo = min(lo, X[k, ax])
-            hi = max(hi, X[k, ax])
-        ext = max(ext, hi - lo)
+    ext = max(_spread(X, 0), _spread(X, 1), _spread(X, 2))
     bound = orient_bound(ext * (1.0 + 1e-12))
     # Cheap rejection: one triangle certainly on one side of the other's plane. With
     # ``skip_shared``, a corner shared by both is left out: the pair then meets only there.
@@ -129,6 +122,17 @@ def _tri_tri(V, F, ident, t, u, skip_shared, flat_check, X, out):
 
 
 @inner(nogil=True, error_model="numpy")
+def _spread(X, ax):
+    """Extent of the six corners X (6, 3) along axis ``ax``."""
+    lo = X[0, ax]
+    hi = lo
+    for k in range(1, 6):
+        lo = min(lo, X[k, ax])
+        hi = max(hi, X[k, ax])
+    return hi - lo
+
+
+@inner(nogil=True, error_model="numpy")
 def _apart_in_projection(X):
     """Are triangles X[0:3] and X[3:6] certainly apart in their projection onto one of the
     coordinate planes? Apart there means apart in space (the projection of a common point is
@@ -145,14 +149,7 @@ def _apart_in_projection(X):
 def _apart_2d(X, i, j):
     """Separating-axis test of the two triangles' projections onto axes (i, j), with an edge
     of either triangle as the axis; every sign certified."""
-    ext = 0.0
-    for ax in (i, j):
-        lo = X[0, ax]
-        hi = lo
-        for k in range(1, 6):
-            lo = min(lo, X[k, ax])
-            hi = max(hi, X[k, ax])
-        ext = max(ext, hi - lo)
+    ext = max(_spread(X, i), _spread(X, j))
     # Rounding of a 2D orientation determinant is below 4 eps times its terms, at most 2 L^2.
     bound = 1e-14 * ext * ext
     for first in range(2):

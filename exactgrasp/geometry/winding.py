@@ -114,9 +114,10 @@ def _column_crossings(triangles, nx, ny, count_only, starts, fill, heights, sign
                 signs[slot] = s_ab
 
 
-@kernel()
-def winding_inside_lattice(triangles, nx, ny, nz):
-    """Nodes (in index coordinates) whose winding number is at least 1, as uint8."""
+@inner()
+def _crossings_by_column(triangles, nx, ny):
+    """Every (column, triangle) crossing: column c's heights and signs are
+    ``heights[starts[c]:starts[c + 1]]`` and ``signs[...]``, in no order."""
     starts = np.zeros(nx * ny + 1, np.int64)
     fill = np.zeros(nx * ny, np.int64)
     empty_f = np.zeros(0, np.float64)
@@ -127,6 +128,13 @@ def winding_inside_lattice(triangles, nx, ny, nz):
     heights = np.empty(starts[-1], np.float64)
     signs = np.empty(starts[-1], np.int8)
     _column_crossings(triangles, nx, ny, False, starts, fill, heights, signs)
+    return starts, heights, signs
+
+
+@kernel()
+def winding_inside_lattice(triangles, nx, ny, nz):
+    """Nodes (in index coordinates) whose winding number is at least 1, as uint8."""
+    starts, heights, signs = _crossings_by_column(triangles, nx, ny)
     inside = np.zeros((nx, ny, nz), np.uint8)
     for c in range(nx * ny):
         lo, hi = starts[c], starts[c + 1]
@@ -165,16 +173,7 @@ def winding_range_columns(triangles, nx, ny):
     read between crossings of distinct heights, so two surfaces that touch (crossings of
     equal height) never show a value that no region has.
     """
-    starts = np.zeros(nx * ny + 1, np.int64)
-    fill = np.zeros(nx * ny, np.int64)
-    empty_f = np.zeros(0, np.float64)
-    empty_i = np.zeros(0, np.int8)
-    _column_crossings(triangles, nx, ny, True, starts, fill, empty_f, empty_i)
-    for c in range(nx * ny):
-        starts[c + 1] += starts[c]
-    heights = np.empty(starts[-1], np.float64)
-    signs = np.empty(starts[-1], np.int8)
-    _column_crossings(triangles, nx, ny, False, starts, fill, heights, signs)
+    starts, heights, signs = _crossings_by_column(triangles, nx, ny)
     least = 0
     most = 0
     for c in range(nx * ny):

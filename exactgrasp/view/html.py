@@ -67,6 +67,28 @@ def plotly_go():
     return require("plotly.graph_objects", "the interactive grasp view", "plotly", "view")
 
 
+def _mesh_trace(go, mesh, *, opacity: float, group: str, lighting: dict | None = None):
+    """A ``Mesh3d`` trace of one mesh of the scene (a link, the object or a ghost)."""
+    v, f = mesh.vertices, mesh.faces
+    options = {} if lighting is None else {"lighting": lighting}
+    return go.Mesh3d(
+        x=v[:, 0],
+        y=v[:, 1],
+        z=v[:, 2],
+        i=f[:, 0],
+        j=f[:, 1],
+        k=f[:, 2],
+        name=mesh.name,
+        color=mesh.color,
+        opacity=opacity,
+        flatshading=True,
+        showlegend=False,
+        legendgroup=group,
+        hovertemplate=f"{mesh.name}<extra></extra>",
+        **options,
+    )
+
+
 def figure(scene: Scene) -> Any:
     """The plotly figure of a scene.
 
@@ -86,44 +108,17 @@ def figure(scene: Scene) -> Any:
     go = plotly_go()
     traces = []
     for mesh in scene.meshes:
-        v, f = mesh.vertices, mesh.faces
         traces.append(
-            go.Mesh3d(
-                x=v[:, 0],
-                y=v[:, 1],
-                z=v[:, 2],
-                i=f[:, 0],
-                j=f[:, 1],
-                k=f[:, 2],
-                name=mesh.name,
-                color=mesh.color,
+            _mesh_trace(
+                go,
+                mesh,
                 opacity=0.55 if mesh.role == "object" else 1.0,
-                flatshading=True,
+                group=mesh.role,
                 lighting={"ambient": 0.55, "diffuse": 0.8, "specular": 0.15},
-                showlegend=False,
-                legendgroup=mesh.role,
-                hovertemplate=f"{mesh.name}<extra></extra>",
             )
         )
     for ghost in scene.ghosts:
-        v, f = ghost.vertices, ghost.faces
-        traces.append(
-            go.Mesh3d(
-                x=v[:, 0],
-                y=v[:, 1],
-                z=v[:, 2],
-                i=f[:, 0],
-                j=f[:, 1],
-                k=f[:, 2],
-                name=ghost.name,
-                color=ghost.color,
-                opacity=GHOST_OPACITY,
-                flatshading=True,
-                showlegend=False,
-                legendgroup="ghost",
-                hovertemplate=f"{ghost.name}<extra></extra>",
-            )
-        )
+        traces.append(_mesh_trace(go, ghost, opacity=GHOST_OPACITY, group="ghost"))
     for axis in scene.axes:
         ends = np.stack([np.zeros(3), axis.tip])
         traces.append(
