@@ -24,7 +24,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 COMMANDS = ("demo", "descriptor", "compare", "close", "inspect", "show", "overlap", "validate",
-            "batch")  # fmt: skip
+            "batch", "separate", "evaluate")  # fmt: skip
 GOAL = 3.0
 
 
