@@ -149,8 +149,6 @@ def resolve_shells(
 
 
 def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn, report):
-    import manifold3d as m3
-
     order = np.argsort(label, kind="stable")
     starts = np.searchsorted(label[order], np.arange(n_shells + 1))
     parts = [compact(V, F[order[starts[i] : starts[i + 1]]]) for i in range(n_shells)]
@@ -174,12 +172,7 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
             return False
         return abs(winding_number(x, parts[j][0], parts[j][1])) > 0.5
 
-    # Which shells hold each cluster (its surfaces meet none of theirs, so one point decides).
-    holders = []
-    for c in range(n_clusters):
-        x = parts[members[c][0]][0][0]
-        near = np.flatnonzero(np.all(lo <= x, axis=1) & np.all(x <= hi, axis=1))
-        holders.append([int(j) for j in near if cluster[j] != c and inside(x, j)])
+    holders = _holders(parts, cluster, members, inside, lo, hi)
     actions: list[str] = report["actions"]
     # Inside-out bodies: a cluster of reversed shells held by nothing, with what it holds.
     top_inverted = [
@@ -283,31 +276,10 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
             if len(merged_f):
                 out.append((merged_v, merged_f))
             continue
-        solid = None
-        if pos:
-            solid = m3.Manifold.batch_boolean(
-                [to_manifold(*parts[i], f"{name} shell {i}", _MERGE_FIX) for i in pos],
-                m3.OpType.Add,
-            )
-        if neg:
-            holes = m3.Manifold.batch_boolean(
-                [
-                    to_manifold(parts[i][0], parts[i][1][:, ::-1], f"{name} shell {i}", _MERGE_FIX)
-                    for i in neg
-                ],
-                m3.OpType.Add,
-            )
-            solid = holes if solid is None else solid - holes
-        mesh = solid.to_mesh64()
-        merged_v = np.asarray(mesh.vert_properties, dtype=np.float64)[:, :3]
-        merged_f = np.asarray(mesh.tri_verts, dtype=np.int64)
-        if not pos:
-            merged_f = merged_f[:, ::-1]
+        merged_v, merged_f = _merge(parts, pos, neg, name)
         for i in idx:
             shells[int(i)]["role"] = "merged"
-        volume = float(
-            _signed_volumes(merged_v, merged_f, np.zeros(len(merged_f), np.int64), 1)[0]
-        )
+        volume = _signed_volume(merged_v, merged_f)
         actions.append(
             f"merged shells {_fmt_shells(idx, shells)} ({how}) into the solid they bound "
             f"(signed volume {float(volumes[idx].sum()):.6g} -> {volume:.6g} m^3)"
@@ -329,6 +301,45 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
     report["volume_after"] = _signed_volume(new_v, new_f)
     _warn_resolved(name, n_shells, report, warn)
     return new_v, new_f, report
+
+
+def _holders(parts, cluster, members, inside, lo, hi) -> list[list[int]]:
+    """The shells that hold each cluster: its surfaces meet none of theirs, so one point (a
+    vertex of the cluster) decides, by ``inside(x, shell)``."""
+    holders = []
+    for c, idx in enumerate(members):
+        x = parts[idx[0]][0][0]
+        near = np.flatnonzero(np.all(lo <= x, axis=1) & np.all(x <= hi, axis=1))
+        holders.append([int(j) for j in near if cluster[j] != c and inside(x, j)])
+    return holders
+
+
+def _merge(parts, pos: list[int], neg: list[int], name: str) -> tuple[np.ndarray, np.ndarray]:
+    """The union of the outward shells ``pos`` less the union of the reversed shells ``neg``
+    (flipped), with manifold3d; reversed again when there are only reversed shells."""
+    import manifold3d as m3
+
+    solid = None
+    if pos:
+        solid = m3.Manifold.batch_boolean(
+            [to_manifold(*parts[i], f"{name} shell {i}", _MERGE_FIX) for i in pos],
+            m3.OpType.Add,
+        )
+    if neg:
+        holes = m3.Manifold.batch_boolean(
+            [
+                to_manifold(parts[i][0], parts[i][1][:, ::-1], f"{name} shell {i}", _MERGE_FIX)
+                for i in neg
+            ],
+            m3.OpType.Add,
+        )
+        solid = holes if solid is None else solid - holes
+    mesh = solid.to_mesh64()
+    merged_v = np.asarray(mesh.vert_properties, dtype=np.float64)[:, :3]
+    merged_f = np.asarray(mesh.tri_verts, dtype=np.int64)
+    if not pos:
+        merged_f = merged_f[:, ::-1]
+    return merged_v, merged_f
 
 
 def _signed_volume(V: np.ndarray, F: np.ndarray) -> float:
