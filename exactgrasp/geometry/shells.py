@@ -36,7 +36,7 @@ from scipy.sparse.csgraph import connected_components
 from exactgrasp.errors import MeshError, warn_caller
 from exactgrasp.geometry.crossings import CROSS, UNSURE, find_crossings
 from exactgrasp.geometry.manifold import to_manifold
-from exactgrasp.geometry.topology import compact, split_shells
+from exactgrasp.geometry.topology import compact, join_meshes, split_shells
 from exactgrasp.geometry.untangle import cut_cluster, untangle
 from exactgrasp.geometry.winding import winding_number
 
@@ -45,10 +45,6 @@ __all__ = ["find_crossings", "resolve_shells", "split_shells"]
 _MERGE_FIX = (
     "overlapping shells cannot be merged; fix the mesh in a modeller (e.g. MeshLab's "
     "'Remove Duplicate Vertices' and 'Repair non Manifold Vertices')."
-)
-_SELF_FIX = (
-    "fix the mesh in a modeller (e.g. MeshLab's 'Select Self Intersecting Faces', then delete "
-    "them and close the hole, or Blender's 3D-print toolbox 'Intersect Face')"
 )
 
 
@@ -290,9 +286,7 @@ def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn
     if not changed:
         return V, F, report
     if out:
-        offsets = np.cumsum([0] + [len(p[0]) for p in out])
-        new_v = np.concatenate([p[0] for p in out])
-        new_f = np.concatenate([p[1] + o for p, o in zip(out, offsets, strict=False)])
+        new_v, new_f = join_meshes(out)
     else:
         raise MeshError(
             f"{name}: resolving its {n_shells} shells leaves no solid (every shell is "

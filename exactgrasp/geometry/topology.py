@@ -9,7 +9,8 @@ edges shared by four or more faces (two parts of a link touching along an edge),
   (holes) and edges used twice in one direction (neighbours that disagree on the outside);
 * drops faces that bound nothing: a face repeated with the same orientation is kept once, a
   face and its reverse cancel (`drop_repeated_faces`);
-* splits a mesh into shells (`split_shells`) and drops unused vertices (`compact`);
+* splits a mesh into shells (`split_shells`), drops unused vertices (`compact`) and joins
+  meshes into one (`join_meshes`);
 * turns a cycle into an oriented 2-manifold without moving a vertex (`split_nonmanifold`):
   around an edge of more than two faces, each face is paired with the neighbour that bounds
   the same solid wedge, and a vertex whose faces then form several fans becomes one vertex
@@ -30,6 +31,7 @@ __all__ = [
     "compact",
     "drop_repeated_faces",
     "edge_defects",
+    "join_meshes",
     "split_nonmanifold",
     "split_shells",
 ]
@@ -313,3 +315,11 @@ def compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Only the vertices the faces use, renumbered in order."""
     used, inverse = np.unique(F.reshape(-1), return_inverse=True)
     return np.ascontiguousarray(V[used]), inverse.reshape(-1, 3).astype(np.int64)
+
+
+def join_meshes(parts) -> tuple[np.ndarray, np.ndarray]:
+    """Meshes ``[(V (n_i, 3), F (m_i, 3)), ...]`` as one pair of arrays, faces renumbered."""
+    offsets = np.cumsum([0] + [len(p[0]) for p in parts])
+    V = np.concatenate([p[0] for p in parts])
+    F = np.concatenate([p[1] + o for p, o in zip(parts, offsets, strict=False)])
+    return V, F

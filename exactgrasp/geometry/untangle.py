@@ -22,6 +22,7 @@ from exactgrasp.geometry.topology import (
     compact,
     drop_repeated_faces,
     edge_defects,
+    join_meshes,
     split_nonmanifold,
     split_shells,
 )
@@ -143,16 +144,7 @@ def untangle(V: np.ndarray, F: np.ndarray, name: str):
         # Cut groups are the solid's boundary already: with nothing else left, the shells need
         # relating no more.
         final = bool(replaced.all()) and not layered
-        coords = [W]
-        kept = [G[~replaced[label]]]
-        offset = len(W)
-        for Vk, Fk in pieces:
-            coords.append(Vk)
-            kept.append(Fk + offset)
-            offset += len(Vk)
-        W = np.concatenate(coords)
-        G = np.concatenate(kept)
-        W, G = compact(W, G)
+        W, G = compact(*join_meshes([(W, G[~replaced[label]]), *pieces]))
         n_shells, label = split_shells(G, len(W))
         t, u, code, point = crossing_pairs(W, G, label)
         same = label[t] == label[u]
@@ -220,16 +212,13 @@ def _cut_group(W, G, label, members, name, n_shells):
             f"and near {format_point(exc.point)} {exc.why}, so the crossing cannot be cut "
             f"with certainty; {SELF_FIX}."
         ) from exc
-    by_level = {k: (Vk, Fk) for k, Vk, Fk in layers}
-    level = 1 - around
-    Vk, Fk = by_level.get(level if level >= 1 else level - 1, (np.empty((0, 3)), None))
+    Vk, Fk = _solid_layer(layers, around)
     flipped = ""
-    if Fk is None and around == 0 and -1 in by_level and 1 not in by_level:
-        Vk, Fk = by_level[-1]
+    if len(Fk) == 0 and around == 0 and any(k == -1 for k, _, _ in layers):
+        # Only a negative layer: an inside-out group, read as the region it wraps.
+        Vk, Fk = _solid_layer(layers, 1)
         Fk = Fk[:, ::-1].copy()
         flipped = ", turned outward (the group is inside out)"
-    if Fk is None:
-        Vk, Fk = np.empty((0, 3)), np.empty((0, 3), np.int64)
     crossing = "crosses itself" if len(members) == 1 else "cross themselves and each other"
     action = (
         f"cut {where} ({len(Vc)} vertices, {len(Fc)} triangles), which {crossing} in "
@@ -246,9 +235,7 @@ def cut_cluster(parts, around: int, refusal: MeshError) -> tuple[np.ndarray, np.
     ``around`` of the shells that hold the group (`exactgrasp.geometry.arrangement`).
     ``refusal`` is raised where the shells touch with uncertain signs (a coplanar contact
     would need cutting too) or a crossing cannot be cut."""
-    offsets = np.cumsum([0] + [len(p[0]) for p in parts])
-    V = np.concatenate([p[0] for p in parts])
-    F = np.concatenate([p[1] + o for p, o in zip(parts, offsets, strict=False)])
+    V, F = join_meshes(parts)
     _, label = split_shells(F, len(V))
     t, u, code, _ = crossing_pairs(V, F, label)
     if (code == UNSURE).any():
@@ -257,8 +244,14 @@ def cut_cluster(parts, around: int, refusal: MeshError) -> tuple[np.ndarray, np.
         layers, _ = winding_layers(V, F, t, u)
     except UncertainCrossingError:
         raise refusal from None
-    # The solid's boundary there lies between the group's winding numbers 1 - around (behind)
-    # and -around; `winding_layers` numbers a layer k <= 0 as k - 1.
+    return _solid_layer(layers, around)
+
+
+def _solid_layer(layers, around: int) -> tuple[np.ndarray, np.ndarray]:
+    """Of a group's winding-number layers (`winding_layers`), the boundary of the solid when
+    the shells around the group add ``around``: the patches between the group's winding
+    numbers 1 - around (behind) and -around. `winding_layers` numbers a layer k <= 0 as
+    k - 1. Empty arrays when there is none."""
     level = 1 - around
     wanted = level if level >= 1 else level - 1
     for k, Vk, Fk in layers:
