@@ -66,22 +66,6 @@ class LRUCache:
         self._store.clear()
 
 
-def sources_digest(*parts: str) -> str:
-    """SHA-256 (hex) of the package's source files under ``parts`` (paths relative to the
-    package: folders or modules), in path order: a cache of what these modules compute is
-    keyed on it, so that an edited module never reads stale entries."""
-    root = Path(__file__).resolve().parent
-    files: list[Path] = []
-    for part in parts:
-        path = root / part
-        files += sorted(path.rglob("*.py")) if path.is_dir() else [path]
-    digest = hashlib.sha256()
-    for path in files:
-        digest.update(path.relative_to(root).as_posix().encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()
-
-
 def cache_root() -> Path:
     """The folder of exactgrasp's disk caches: ``EXACTGRASP_CACHE``, else
     ``$XDG_CACHE_HOME/exactgrasp``, else ``~/.cache/exactgrasp``."""
@@ -106,7 +90,7 @@ class DiskCache:
         Subfolder, and part of every key (``"solids"``).
     version : str or callable
         Part of every key: the version of whatever computes the entries, or a function
-        giving it (called once, on first use; e.g. `sources_digest`).
+        giving it (called once, on first use).
     """
 
     def __init__(self, kind: str, version: str | Callable[[], str]):

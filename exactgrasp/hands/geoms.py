@@ -6,14 +6,17 @@ With ``repair=True`` a mesh geom that is not a closed solid is repaired as
 
 from __future__ import annotations
 
+import hashlib
 import warnings
+from pathlib import Path
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from exactgrasp.cache import DiskCache, sources_digest
+from exactgrasp.cache import DiskCache
+from exactgrasp.compiling import kernel_sources_digest
 from exactgrasp.errors import Fix, MeshError, ModelError, warn_caller
 from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
@@ -59,11 +62,16 @@ GEOM_KIND.update({5: "cylinder", 6: "box", 7: "mesh", 8: "sdf"})
 JOINT_FREE, JOINT_BALL, JOINT_SLIDE, JOINT_HINGE = range(4)
 
 
+def _welding_version() -> str:
+    """The package version, the sources of the geometry room (among the kernels' sources) and
+    of this module: an edit to any of them starts the cache afresh."""
+    own = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
+    return f"{__version__}/{kernel_sources_digest()}/{own}"
+
+
 #: Welded, resolved link meshes on disk, keyed on the arrays MuJoCo read from the mesh file and
 #: on the source of the code that welds and resolves them.
-WELDED = DiskCache(
-    "solids", version=lambda: __version__ + sources_digest("geometry", "hands/geoms.py")
-)
+WELDED = DiskCache("solids", version=_welding_version)
 
 
 def weld_mesh(
