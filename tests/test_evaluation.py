@@ -480,3 +480,50 @@ def test_the_names_listed_without_the_code_are_the_code_s():
 
     assert tuple(symmetry.SYMMETRIES) == names.SYMMETRY_NAMES
     assert set(names.DEFAULT_DISTANCES) <= set(names.DISTANCES)
+
+
+# -- the report "What the descriptor tells you" ---------------------------------------------
+
+REPORT = Path(__file__).resolve().parents[1] / "docs" / "reports" / "descriptor-meaning"
+
+
+def test_the_committed_report_is_the_text_of_its_summary():
+    from exactgrasp.evaluation.text import report_markdown
+
+    summary = json.loads((REPORT / "summary.json").read_text())
+    assert report_markdown(summary) == (REPORT / "report.md").read_text()
+    hands = summary["hands"]
+    assert hands["hands"] == ["barrett", "gripper", "adroit"]
+    assert set(hands["groups"]) == {
+        "barrett / gripper",
+        "barrett / adroit",
+        "gripper / adroit",
+        "barrett / gripper / adroit",
+    }
+
+
+def test_across_hand_pairs_are_same_placement_against_one_hand():
+    from exactgrasp.evaluation.study import across_hand_pairs
+
+    hand = np.repeat(["a", "b", "c"], 2)
+    placement = np.tile(np.arange(2), 3)
+    names = [f"{h}{p}" for h, p in zip(hand, placement, strict=True)]
+    pairs = across_hand_pairs(names, hand, placement)
+    assert pairs.n_same == 6 and len(pairs) == 9  # 3 hand pairs x 2 placements; 3 in one hand
+    across = hand[pairs.first] != hand[pairs.second]
+    assert np.all(pairs.label[across] == 1) and np.all(pairs.label[~across] == 0)
+
+
+def test_report_sections_option_needs_known_names_and_the_existing_summary(tmp_path):
+    from exactgrasp.evaluation.run import build_report
+
+    with pytest.raises(EvaluationError, match="unknown sections"):
+        build_report(tmp_path, tmp_path / "out", tmp_path / "cache", sections=("handz",))
+    with pytest.raises(EvaluationError, match="existing summary.json"):
+        build_report(tmp_path, tmp_path / "out", tmp_path / "cache", sections=("hands",))
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "summary.json").write_text(json.dumps({"quick": False}))
+    with pytest.raises(EvaluationError, match="same --quick setting"):
+        build_report(
+            tmp_path, tmp_path / "out", tmp_path / "cache", quick=True, sections=("hands",)
+        )

@@ -42,6 +42,8 @@ def test_golden(case, backend, request):
         pytest.skip(f"the {backend!r} backend is not available here")
     if regenerate.CASES[case][1]:
         request.getfixturevalue("shared_data")  # skips with a reason when absent
+    if missing := regenerate.package_missing(case):
+        pytest.skip(f"the case's hand needs the package {missing} (exactgrasp[hands])")
     path = regenerate.golden_path(case, backend)
     if not path.exists():
         pytest.fail(f"no golden {path.name}; create it with `{REGENERATE} --backend {backend}`")

@@ -17,7 +17,7 @@ from typing import Any
 
 from exactgrasp.cli.common import FlagTerms, described, flag, in_flag_terms
 from exactgrasp.errors import ExactGraspError, Fix, ModelError
-from exactgrasp.hands.builtins import BUILTIN_MJCF
+from exactgrasp.hands.builtins import BUILTIN_HANDS, BUILTIN_MJCF
 
 __all__ = ["add_parser", "cmd_inspect", "inspect_lines", "package_dirs_from_args"]
 
@@ -60,7 +60,8 @@ def inspect_lines(
     ----------
     model : str
         A URDF or MJCF file, or the name of a built-in hand (see
-        `exactgrasp.hands.builtins.BUILTIN_MJCF`).
+        `exactgrasp.hands.builtins.BUILTIN_HANDS`; ``adroit`` and ``shadow_hand`` are read
+        from their package's file, cut at their root body unless ``root_body`` is given).
     geometry : {"collision", "visual", "all"}
     package_dirs : dict or list, optional
         See `exactgrasp.hands.loading.load_model`.
@@ -73,6 +74,7 @@ def inspect_lines(
     """
     from exactgrasp.grasp.closing import closing_directions
     from exactgrasp.hands.builtins import get_builtin
+    from exactgrasp.hands.dexterous import DEXTEROUS_HANDS, model_file
     from exactgrasp.hands.hand import Hand
     from exactgrasp.hands.loading import compile_source, load_model
     from exactgrasp.hands.palm import missing_palm_fix
@@ -80,6 +82,10 @@ def inspect_lines(
 
     xml = BUILTIN_MJCF.get(model) if not Path(model).exists() else None
     path = f"{model}.xml" if xml is not None else model
+    packaged = model in DEXTEROUS_HANDS and not Path(model).exists()
+    if packaged:  # a built-in hand read from its package's file, cut at its root body
+        path = str(model_file(model))
+        root_body = root_body or DEXTEROUS_HANDS[model]["root_body"]
     mj_model = compile_source(path, geometry=geometry, package_dirs=package_dirs, xml=xml)
     n_moving = sum(int(t) in (2, 3) for t in mj_model.jnt_type)
     lines = [
@@ -91,7 +97,9 @@ def inspect_lines(
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            if xml is not None and root_body is None:  # with its palm frame and options
+            if (xml is not None and root_body is None) or (
+                packaged and root_body == DEXTEROUS_HANDS[model]["root_body"]
+            ):  # with its palm frame and options
                 hand = get_builtin(model)().model
             else:
                 hand = load_model(
@@ -153,7 +161,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description=described(
             (
                 "Print the bodies of a URDF or MJCF model (or of a built-in hand: "
-                f"{', '.join(sorted(BUILTIN_MJCF))}) with their joints (type, axis, limits), "
+                f"{', '.join(sorted(BUILTIN_HANDS))}) with their joints (type, axis, limits), "
                 "geoms (count, kinds, size) and sites, the top-level bodies that could be the "
                 "hand, and the hand load_model makes of it: to choose root_body, the palm frame "
                 "and the closing joints."

@@ -127,21 +127,23 @@ def steps_figure(sampling: dict, path: Path) -> Path:
     return _save(fig, path)
 
 
-def normalisation_figure(hands: dict[str, Any], path: Path) -> Path:
-    """Across-hand AUC for each normalisation."""
-    names = list(hands["normalisations"])
-    fig, ax = plt.subplots(figsize=(6, 3.2))
-    for k, what in enumerate(("same_placement_across_hands", "gripper_clusters")):
-        rows = [hands["normalisations"][n][what] for n in names]
+def hands_figure(hands: dict[str, Any], path: Path) -> Path:
+    """Across-hand AUC (with interval) for each normalisation, one row of points per group."""
+    groups = list(hands["groups"])
+    names = list(hands["groups"][groups[0]]["normalisations"])
+    fig, ax = plt.subplots(figsize=(6.5, 0.5 * len(names) * len(groups) / 2 + 1.5))
+    width = 0.8 / len(groups)
+    for k, group in enumerate(groups):
+        rows = [hands["groups"][group]["normalisations"][n]["same_placement_across_hands"]
+                for n in names]  # fmt: skip
         a = np.array([r["auc"] for r in rows])
         lo = np.array([r["low"] for r in rows])
         hi = np.array([r["high"] for r in rows])
-        y = np.arange(len(names)) + (k - 0.5) * 0.3
-        ax.errorbar(a, y, xerr=[a - lo, hi - a], fmt="o", capsize=2,
-                    label=what.replace("_", " "))  # fmt: skip
+        y = np.arange(len(names)) + (k - (len(groups) - 1) / 2) * width
+        ax.errorbar(a, y, xerr=[a - lo, hi - a], fmt="o", ms=4, capsize=2, label=group)
     ax.set_yticks(np.arange(len(names)), names)
     ax.axvline(0.5, color="grey", ls=":", lw=0.8)
-    ax.set_xlabel("AUC")
-    ax.legend(fontsize=8)
+    ax.set_xlabel("AUC: same placement across hands against different placements in one hand")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.invert_yaxis()
     return _save(fig, path)

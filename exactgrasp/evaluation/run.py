@@ -3,6 +3,9 @@
 ``python -m exactgrasp.evaluation`` runs `build_report`. Each section's numbers are kept in
 ``CACHE/sections/NAME.json`` (with the descriptors in ``CACHE/descriptors``), so a second run
 only redraws and rewrites; ``--fresh`` recomputes the sections (descriptors stay cached).
+``--sections hands`` (any of `SECTIONS`) computes only those sections and takes the others'
+numbers from the report's existing ``summary.json``: their text is rewritten from the same
+numbers and their figures are left as they are.
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from exactgrasp.errors import EvaluationError
 from exactgrasp.evaluation import figures as fig
 from exactgrasp.evaluation.study import (
     Study,
@@ -28,7 +32,10 @@ from exactgrasp.evaluation.text import report_markdown
 from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.version import __version__
 
-__all__ = ["SAMPLING", "build_report"]
+__all__ = ["SAMPLING", "SECTIONS", "build_report"]
+
+#: The report's sections that compute numbers, in order.
+SECTIONS = ("clusters", "noise", "sampling", "raw", "hands")
 
 
 def _s(n_t: int, n_a: int, n_r: int, n_steps: int = 9) -> dict[str, int]:
@@ -75,6 +82,7 @@ def build_report(
     n_boot: int = 2000,
     command: str = "python -m exactgrasp.evaluation",
     log: Callable[[str], None] = print,
+    sections: tuple[str, ...] | None = None,
 ) -> dict[str, Any]:
     """Compute (or read back) every section, draw the figures, write ``report.md`` and
     ``summary.json`` into ``out``.
@@ -95,6 +103,10 @@ def build_report(
     command : str
         Written into the report.
     log : callable
+    sections : tuple of str, optional
+        Compute only these of `SECTIONS` (from their cache unless ``fresh``) and redraw only
+        their figures; the other sections' numbers are read from ``out/summary.json``, which
+        must exist. Default: every section.
 
     Returns
     -------
@@ -108,7 +120,27 @@ def build_report(
     sections_dir = cache / ("sections-quick" if quick else "sections")
     sections_dir.mkdir(parents=True, exist_ok=True)
 
+    previous: dict[str, Any] = {}
+    if sections is not None:
+        unknown = sorted(set(sections) - set(SECTIONS))
+        if unknown:
+            raise EvaluationError(f"unknown sections {unknown}; the sections: {list(SECTIONS)}")
+        try:
+            previous = json.loads((out / "summary.json").read_text())
+        except (OSError, ValueError) as exc:
+            raise EvaluationError(
+                f"--sections needs the report's existing summary.json for the other "
+                f"sections' numbers: {exc}"
+            ) from None
+        if bool(previous.get("quick")) != quick:
+            raise EvaluationError(
+                f"{out / 'summary.json'} is {'a quick' if previous.get('quick') else 'a full'} "
+                "run; --sections keeps its other sections, so run with the same --quick setting."
+            )
+
     def section(name: str, compute: Callable[[], dict]) -> dict:
+        if sections is not None and name not in sections:
+            return previous[name]
         file = sections_dir / f"{name}.json"
         if file.exists() and not fresh:
             return json.loads(file.read_text())
@@ -133,18 +165,35 @@ def build_report(
     hands = section("hands", lambda: hands_section(study, main, default))
 
     figures = out / "figures"
-    drawn = {
-        "roc": fig.roc_figure(clusters, default, figures / "roc-clusters.png"),
-        "aucs": fig.auc_bars(clusters, figures / "auc-clusters.png", "adjusted contact grasps"),
-        "raw": fig.auc_bars(raw, figures / "auc-raw.png", "raw study records"),
-        "sampling": fig.sampling_figure(sampling, figures / "sampling.png"),
-        "steps": fig.steps_figure(sampling, figures / "steps.png"),
-        "hands": fig.normalisation_figure(hands, figures / "hands.png"),
+    # Each figure with the section it draws (ROC curves are not kept in summary.json, so a
+    # section taken from it keeps its figures as they are).
+    drawers = {
+        "roc": (
+            "clusters",
+            lambda: fig.roc_figure(clusters, default, figures / "roc-clusters.png"),
+        ),
+        "aucs": (
+            "clusters",
+            lambda: fig.auc_bars(
+                clusters, figures / "auc-clusters.png", "adjusted contact grasps"
+            ),
+        ),
+        "raw": ("raw", lambda: fig.auc_bars(raw, figures / "auc-raw.png", "raw study records")),
+        "sampling": ("sampling", lambda: fig.sampling_figure(sampling, figures / "sampling.png")),
+        "steps": ("sampling", lambda: fig.steps_figure(sampling, figures / "steps.png")),
+        "hands": ("hands", lambda: fig.hands_figure(hands, figures / "hands.png")),
     }
+    drawn = {
+        key: draw() if sections is None or name in sections else out / previous["figures"][key]
+        for key, (name, draw) in drawers.items()
+    }
+    today = datetime.date.today().isoformat()
+    runs = {name: {"command": command, "date": today} for name in sections or ()}
     summary = {
         "version": __version__,
-        "date": datetime.date.today().isoformat(),
-        "command": command,
+        "date": previous.get("date", today),
+        "command": previous.get("command", command),
+        "section_runs": {**previous.get("section_runs", {}), **runs},
         "quick": quick,
         "default": chosen,
         "clusters": clusters,
@@ -153,7 +202,7 @@ def build_report(
         "raw": raw,
         "hands": hands,
         "figures": {k: str(v.relative_to(out)) for k, v in drawn.items()},
-        "seconds": time.perf_counter() - start,
+        "seconds": previous.get("seconds", 0.0) if sections else time.perf_counter() - start,
     }
     out.mkdir(parents=True, exist_ok=True)
     (out / "summary.json").write_text(

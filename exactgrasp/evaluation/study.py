@@ -7,7 +7,7 @@ returns a JSON-ready dict; `exactgrasp.evaluation.__main__` runs them, caches ea
 result, draws the figures and writes the report. Grasps: the 34 cereal-box contact grasps and
 their raw study records with the authors' clusters, the noise test's grasps and copies of
 `exactgrasp.report`, and the same cereal-box placements grasped by the built-in parallel
-gripper, closed with `close_fingers`.
+gripper and the built-in Adroit hand, closed with `close_fingers`.
 """
 
 from __future__ import annotations
@@ -335,20 +335,42 @@ def raw_section(study: Study, sampler: PathSampler, adjusted: dict) -> dict:
     return raw
 
 
-def gripper_grasps(study: Study, grasps: list[Grasp]) -> tuple[list[Grasp], list[dict]]:
-    """The same object placements, relative to the palm frame, in the parallel gripper.
+def placed_grasps(
+    grasps: list[Grasp], hand_name: str, max_backoff: float
+) -> tuple[list[Grasp], list[dict]]:
+    """The same object placements, relative to the palm frame, in another built-in hand.
 
     A placement keeps its rotation and its position in metres relative to the palm frame (the
-    canonical frame without its scale: the box does not shrink with the hand); the gripper
-    opens fully, the object is backed off the palm where it penetrates, and the jaws close
-    until they touch (`close_fingers`). Placements where the jaws touch nothing, that had to
-    be backed off more than `GRIPPER_BACKOFF`, or that cannot be closed, are dropped.
-    """
-    from exactgrasp.hands.gripper import parallel_gripper
+    canonical frame without its scale: the box does not shrink with the hand); the hand opens
+    (its closing joints to their open limits), the object is backed off the palm where it
+    penetrates, and the fingers close until they touch (`close_fingers`). Placements where no
+    finger touches, that had to be backed off more than ``max_backoff`` (m), or that cannot
+    be closed, are dropped.
 
+    Parameters
+    ----------
+    grasps : list of Grasp
+        The Barrett grasps whose placements are copied.
+    hand_name : str
+        A built-in hand (``"parallel_gripper"``, ``"adroit"``).
+    max_backoff : float
+        Largest back-off kept (m).
+
+    Returns
+    -------
+    grasps : list of Grasp
+        Named ``HAND/STEM`` after the Barrett grasp's ``adjusted/STEM``.
+    notes : list of dict
+        Per Barrett grasp: ``backoff_m`` and ``contacts`` (the links touching), or
+        ``skipped`` (why it was dropped).
+    """
+    from exactgrasp.hands.builtins import get_builtin
+
+    build = get_builtin(hand_name)
+    label = HAND_LABELS.get(hand_name, hand_name)
     out, notes = [], []
     for g in grasps:
-        hand = parallel_gripper()
+        hand = build()
         palm_b = g.frame.matrix / g.frame.scale
         palm_g = hand.frame.matrix / hand.frame.scale
         palm_b[3, 3] = palm_g[3, 3] = 1.0
@@ -362,14 +384,14 @@ def gripper_grasps(study: Study, grasps: list[Grasp]) -> tuple[list[Grasp], list
             continue
         links = sorted({link for f in closed.fingers for link in f.contact_links})
         if not links:
-            notes.append({"grasp": g.name, "skipped": "the jaws close without touching"})
+            notes.append({"grasp": g.name, "skipped": "the fingers close without touching"})
             continue
-        if closed.backoff_distance > GRIPPER_BACKOFF:
+        if closed.backoff_distance > max_backoff:
             notes.append(
                 {"grasp": g.name, "skipped": f"backed off {closed.backoff_distance * 1e3:.0f} mm"}
             )
             continue
-        name = g.name.replace("adjusted/", "gripper/")
+        name = g.name.replace("adjusted/", f"{label}/")
         out.append(Grasp(closed.hand, g.object, closed.object_pose, name=name))
         notes.append(
             {"grasp": g.name, "backoff_m": float(closed.backoff_distance), "contacts": links}
@@ -381,8 +403,16 @@ def gripper_grasps(study: Study, grasps: list[Grasp]) -> tuple[list[Grasp], list
 #: to clear the open jaws (set after seeing that spread, before any AUC).
 GRIPPER_BACKOFF = 0.02
 
+#: The hands of the hands section by built-in name (the Barrett is the shared data's), with
+#: the largest back-off kept for each: the gripper's as above; the Adroit hand opens flat,
+#: so a placement that had to move more than 20 mm off its palm is no longer the same
+#: placement either (the same bound, set before any AUC).
+OTHER_HANDS = {"parallel_gripper": GRIPPER_BACKOFF, "adroit": 0.02}
+#: Short names of the hands in the section's keys and grasp names.
+HAND_LABELS = {"barrett": "barrett", "parallel_gripper": "gripper", "adroit": "adroit"}
+
 #: How the hands section puts the descriptors of different hands on one scale.
-NORMALISATIONS = ("hand volume", "none", "hull volume", "own maximum")
+NORMALISATIONS = ("hand volume", "none", "cubic metres", "hull volume", "own maximum")
 
 
 def _normalised(descriptor, hull: float, how: str) -> np.ndarray:
@@ -392,6 +422,8 @@ def _normalised(descriptor, hull: float, how: str) -> np.ndarray:
         return values
     if how == "none":
         return values * hand
+    if how == "cubic metres":
+        return values * float(descriptor.metadata["hand_volume_m3"])
     if how == "hull volume":
         return values * hand / hull
     if how == "own maximum":
@@ -399,50 +431,101 @@ def _normalised(descriptor, hull: float, how: str) -> np.ndarray:
     raise ValueError(how)
 
 
-def hands_section(study: Study, sampler: PathSampler, distance: str) -> dict:
-    """The Barrett and the parallel gripper at the same placements: across-hand AUCs."""
-    barrett, clusters = cereal_grasps(study.barrett)
-    gripper, notes = gripper_grasps(study, barrett)
-    kept = [n["grasp"] for n in notes if "skipped" not in n]
-    index = [i for i, g in enumerate(barrett) if g.name in kept]
-    barrett = [barrett[i] for i in index]
-    clusters = [clusters[i] for i in index]
-    grasps = barrett + gripper
-    n = len(barrett)
-    spec = distance.split(" min ")[0]
-    descriptors = [study.cache.descriptor(g, sampler, "voxel") for g in grasps]
-    hulls = [
-        float(
-            trimesh.Trimesh(np.vstack([v for v, _ in g.canonical_hand_links()])).convex_hull.volume
-        )
-        for g in grasps
-    ]
-    hand = np.repeat(["barrett", "gripper"], n)
-    placement = np.tile(np.arange(n), 2)
-    i, j = np.triu_indices(2 * n, 1)
+def across_hand_pairs(names: list[str], hand: np.ndarray, placement: np.ndarray) -> LabelledPairs:
+    """Same placement in two hands ('same', 1) against two placements in one hand (0).
+
+    Parameters
+    ----------
+    names : list of str, length n
+        The grasps.
+    hand, placement : numpy.ndarray, shape (n,)
+        Each grasp's hand and placement index.
+
+    Returns
+    -------
+    LabelledPairs
+        Pairs of different placements in different hands are left out; the grasp groups
+        are the placements.
+    """
+    i, j = np.triu_indices(len(names), 1)
     keep = (placement[i] == placement[j]) | (hand[i] == hand[j])
     i, j = i[keep], j[keep]
     label = (placement[i] == placement[j]).astype(float)
-    across = LabelledPairs([g.name for g in grasps], i, j, label, None, list(map(str, placement)))
+    return LabelledPairs(names, i, j, label, None, list(map(str, placement)))
+
+
+def hands_section(study: Study, sampler: PathSampler, distance: str) -> dict:
+    """The Barrett, the parallel gripper and the Adroit hand at the same placements.
+
+    For each pair of hands and for all three: the AUC of "the same placement in two hands is
+    closer than two placements in one hand", under each of `NORMALISATIONS`, on the placements
+    every hand of the group kept; and each hand's AUC on the Barrett clusters.
+    """
+    barrett, clusters = cereal_grasps(study.barrett)
+    by_hand: dict[str, dict[str, Grasp]] = {"barrett": {g.name: g for g in barrett}}
+    closing = {}
+    for hand_name, max_backoff in OTHER_HANDS.items():
+        label = HAND_LABELS[hand_name]
+        study.log(f"hands: closing the {label} at the Barrett placements")
+        placed, notes = placed_grasps(barrett, hand_name, max_backoff)
+        kept = [n["grasp"] for n in notes if "skipped" not in n]
+        by_hand[label] = dict(zip(kept, placed, strict=True))
+        closing[label] = notes
+    labels = list(by_hand)
+    cluster_of = {g.name: c for g, c in zip(barrett, clusters, strict=True)}
+    spec = distance.split(" min ")[0]
+    study.log("hands: descriptors")
+    descriptors, hulls = {}, {}
+    for label in labels:
+        for key, g in by_hand[label].items():
+            descriptors[label, key] = study.cache.descriptor(g, sampler, "voxel")
+            links = g.canonical_hand_links()
+            hulls[label, key] = float(
+                trimesh.Trimesh(np.vstack([v for v, _ in links])).convex_hull.volume
+            )
+    first = {label: next(iter(by_hand[label])) for label in labels}
     out: dict[str, Any] = {
-        "n_placements": n,
-        "closing": notes,
+        "hands": labels,
+        "n_placements": {label: len(by_hand[label]) for label in labels},
+        "closing": closing,
         "hand_volume_m3": {
-            "barrett": float(descriptors[0].metadata["hand_volume_m3"]),
-            "gripper": float(descriptors[n].metadata["hand_volume_m3"]),
+            label: float(descriptors[label, first[label]].metadata["hand_volume_m3"])
+            for label in labels
         },
-        "hull_volume_canonical": {"barrett": hulls[0], "gripper": hulls[n]},
-        "normalisations": {},
+        "hull_volume_canonical": {label: hulls[label, first[label]] for label in labels},
+        "groups": {},
+        "clusters": {},
     }
-    for how in NORMALISATIONS:
-        stacks = [_normalised(d, h, how)[None] for d, h in zip(descriptors, hulls, strict=True)]
+    groups = [(a, b) for k, a in enumerate(labels) for b in labels[k + 1 :]] + [tuple(labels)]
+    for group in groups:
+        keys = [k for k in by_hand["barrett"] if all(k in by_hand[h] for h in group)]
+        hand = np.repeat(list(group), len(keys))
+        placement = np.tile(np.arange(len(keys)), len(group))
+        names = [by_hand[h][k].name for h in group for k in keys]
+        pairs = across_hand_pairs(names, hand, placement)
+        i, j, same = pairs.first, pairs.second, pairs.label == 1
+        entry: dict[str, Any] = {"n_placements": len(keys), "normalisations": {}}
+        for how in NORMALISATIONS:
+            stacks = [
+                _normalised(descriptors[h, k], hulls[h, k], how)[None] for h in group for k in keys
+            ]
+            m = distance_matrix(stacks, spec, sampler.times, use_configurations=False)
+            row = {
+                "same_placement_across_hands": study.auc(m, pairs, f"{how}: {' / '.join(group)}"),
+                "median_same_placement": float(np.median(m[i[same], j[same]])),
+            }
+            for h in group:
+                inside = np.flatnonzero(hand == h)
+                sub = m[np.ix_(inside, inside)][np.triu_indices(len(inside), 1)]
+                row[f"median_{h}_pairs"] = float(np.median(sub))
+            entry["normalisations"][how] = row
+        out["groups"][" / ".join(group)] = entry
+    for label in labels:
+        keys = list(by_hand[label])
+        stacks = [descriptors[label, k].values[None] for k in keys]
         m = distance_matrix(stacks, spec, sampler.times, use_configurations=False)
-        gp = pairs_from_groups([g.name for g in gripper], clusters)
-        out["normalisations"][how] = {
-            "same_placement_across_hands": study.auc(m, across, f"{how}: across hands"),
-            "gripper_clusters": study.auc(m[n:, n:], gp, f"{how}: gripper clusters"),
-            "median_same_placement": float(np.median(m[i[label == 1], j[label == 1]])),
-            "median_barrett_pairs": float(np.median(m[:n, :n][np.triu_indices(n, 1)])),
-            "median_gripper_pairs": float(np.median(m[n:, n:][np.triu_indices(n, 1)])),
-        }
+        own = pairs_from_groups(
+            [by_hand[label][k].name for k in keys], [cluster_of[k] for k in keys]
+        )
+        out["clusters"][label] = study.auc(m, own, f"{label}: Barrett clusters")
     return out

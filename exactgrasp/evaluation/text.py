@@ -250,37 +250,95 @@ def _raw(s: dict) -> list[str]:
     return lines
 
 
+def _against_chance(e: dict) -> str:
+    """Where an AUC's interval lies against 0.5 (chance)."""
+    if e["low"] > 0.5:
+        return "above chance"
+    if e["high"] < 0.5:
+        return "below chance"
+    return "not distinguishable from chance"
+
+
 def _hands(s: dict) -> list[str]:
     h = s["hands"]
-    skipped = [n for n in h["closing"] if "skipped" in n]
+    names = {"barrett": "Barrett", "gripper": "gripper", "adroit": "Adroit"}
+    groups = h["groups"]
+    hows = list(next(iter(groups.values()))["normalisations"])
+
+    def shown(group: str) -> str:
+        return " / ".join(names.get(x, x) for x in group.split(" / "))
+
     lines = [
         "## 6. Different hand geometry",
         "",
-        "Hands: the Barrett of the shared data and the built-in parallel gripper. No dexterous "
-        "hand model is available without a download here (no model package is installed, and "
-        "nothing is fetched at run time), so the third hand is missing from this report.",
+        "Hands: the Barrett of the shared data, the built-in parallel gripper and the built-in "
+        "Adroit five-finger hand (`eg.hands.adroit()`: the model file of the package "
+        "`gymnasium-robotics`, MIT licence, installed with `exactgrasp[hands]`; its "
+        "collision geoms, forearm included, 22 links).",
         "",
-        f"The gripper holds the box at the Barrett grasps' placements relative to the palm frame "
-        f"(same rotation, same position in metres; the canonical frame's scale would shrink "
-        f"the box's distances with the smaller hand and bury it in the gripper), opened, backed "
-        f"off the palm where needed and closed with `close_fingers`. {h['n_placements']} "
-        f"placements are kept; {len(skipped)} were dropped (backed off more than 20 mm, or the "
-        f"jaws touched nothing). "
-        "Pairs: the same placement in the two hands ('same') against two placements in one "
-        "hand ('different'). Hand volumes: Barrett "
-        f"{h['hand_volume_m3']['barrett'] * 1e6:.1f} cm^3, gripper "
-        f"{h['hand_volume_m3']['gripper'] * 1e6:.1f} cm^3.",
+        "The gripper and the Adroit hand hold the box at the Barrett grasps' placements relative "
+        "to the palm frame (same rotation, same position in metres; the canonical frame's scale "
+        "would shrink the box's distances with a smaller hand and bury it in the hand), opened, "
+        "backed off the palm where needed and closed with `close_fingers`. A placement is "
+        "dropped for a hand when it had to be backed off more than 20 mm or no finger touched "
+        "the box. Pairs: the same placement in two hands ('same') against two placements in "
+        "one hand ('different'), on the placements every hand of the group kept. AUC on the "
+        "Barrett clusters: each hand's own grasps, labelled with the cluster of the Barrett "
+        "grasp they copy, hand-volume normalisation.",
         "",
-        "| normalisation | same placement across hands: AUC "
-        "| gripper on the Barrett clusters: AUC | median distance, same placement "
-        "| median, Barrett pairs | median, gripper pairs |",
-        "|---|---|---|---|---|---|",
+        "| hand | placements kept | hand volume | AUC on the Barrett clusters |",
+        "|---|---|---|---|",
     ]
-    for name, e in h["normalisations"].items():
+    for label in h["hands"]:
         lines.append(
-            f"| {name} | {_ci(e['same_placement_across_hands'])} | "
-            f"{_ci(e['gripper_clusters'])} | {_f(e['median_same_placement'], 4)} | "
-            f"{_f(e['median_barrett_pairs'], 4)} | {_f(e['median_gripper_pairs'], 4)} |"
+            f"| {names.get(label, label)} | {h['n_placements'][label]} | "
+            f"{h['hand_volume_m3'][label] * 1e6:.1f} cm^3 | {_ci(h['clusters'][label])} |"
+        )
+    lines += [
+        "",
+        "Same placement across hands closer than different placements on one hand: AUC "
+        "(95 % interval, grasps resampled). Normalisations: `hand volume` is the descriptor "
+        "as it is (intersection over the hand's volume); `none` the intersection volume in "
+        "canonical units; `cubic metres` the intersection volume in m^3; `hull volume` over "
+        "the volume of the hand's convex hull instead; `own maximum` each descriptor over its "
+        "largest value.",
+        "",
+        "| normalisation |"
+        + "".join(f" {shown(g)} ({e['n_placements']} placements) |" for g, e in groups.items()),
+        "|---|" + "---|" * len(groups),
+    ]
+    for how in hows:
+        cells = "".join(
+            f" {_ci(e['normalisations'][how]['same_placement_across_hands'])} |"
+            for e in groups.values()
+        )
+        lines.append(f"| {how} |{cells}")
+    lines += [
+        "",
+        "Median distances (the default distance), same placement against pairs within each hand:",
+        "",
+        "| hands | normalisation | same placement | within each hand |",
+        "|---|---|---|---|",
+    ]
+    for g, e in groups.items():
+        for how in hows:
+            row = e["normalisations"][how]
+            within = ", ".join(
+                f"{names.get(x, x)} {_f(row[f'median_{x}_pairs'], 4)}" for x in g.split(" / ")
+            )
+            lines.append(
+                f"| {shown(g)} | {how} | {_f(row['median_same_placement'], 4)} | {within} |"
+            )
+    lines.append("")
+    for g, e in groups.items():
+        rows = e["normalisations"]
+        best = max(hows, key=lambda n: rows[n]["same_placement_across_hands"]["auc"])
+        plain = rows["hand volume"]["same_placement_across_hands"]
+        top = rows[best]["same_placement_across_hands"]
+        lines.append(
+            f"- {shown(g)}: with the hand-volume normalisation {_ci(plain)}, "
+            f"{_against_chance(plain)}; the best normalisation, {best}, {_ci(top)}, "
+            f"{_against_chance(top)}."
         )
     lines += ["", "![Across-hand AUC by normalisation](figures/hands.png)", ""]
     return lines
@@ -298,6 +356,12 @@ def report_markdown(summary: dict[str, Any]) -> str:
         "numbers is on the page [What the descriptor tells you](../../descriptor-meaning.md).",
         "",
     ]
+    for name, run in summary.get("section_runs", {}).items():
+        head += [
+            f"Section {name} last recomputed alone by `{run['command']}` on {run['date']}; "
+            "the other sections' numbers are those of the run above.",
+            "",
+        ]
     if summary.get("quick"):
         head += ["**Quick run: small samplers, few replicates. Not the committed numbers.**", ""]
     body = (

@@ -1,8 +1,10 @@
 """Hands: models (rigid meshes, MJCF/URDF through MuJoCo), posed hands, built-in hands.
 
 ``eg.hands.barrett()`` builds the built-in Barrett hand, ``eg.hands.parallel_gripper()`` the
-built-in parallel-jaw gripper; `load_model` compiles a model file (URDF or MJCF as robotics
-packages ship them: ``package://`` mesh names, scenes with ``root_body=``).
+built-in parallel-jaw gripper, ``eg.hands.adroit()`` and ``eg.hands.shadow_hand()`` the
+five-finger hands of the optional package ``gymnasium-robotics``; `load_model` compiles a
+model file (URDF or MJCF as robotics packages ship them: ``package://`` mesh names, scenes
+with ``root_body=``).
 Modules here import `exactgrasp.errors`, `exactgrasp.cache`, `exactgrasp.geometry` and each
 other (never grasps, paths or backends).
 """
@@ -15,6 +17,7 @@ from typing import TYPE_CHECKING
 # or importing the submodule `exactgrasp.hands.barrett` would shadow the function.
 from exactgrasp.hands.barrett import barrett, barrett_model
 from exactgrasp.hands.builtins import BUILTIN_HANDS, available_hands, get_builtin
+from exactgrasp.hands.dexterous import adroit, adroit_model, shadow_hand, shadow_hand_model
 from exactgrasp.hands.gripper import parallel_gripper, parallel_gripper_model
 from exactgrasp.lazy import lazy_names
 
@@ -47,6 +50,8 @@ __all__ = [
     "KinematicModel",
     "PalmSpec",
     "RigidModel",
+    "adroit",
+    "adroit_model",
     "available_hands",
     "barrett",
     "barrett_model",
@@ -54,6 +59,8 @@ __all__ = [
     "load_model",
     "parallel_gripper",
     "parallel_gripper_model",
+    "shadow_hand",
+    "shadow_hand_model",
 ]
 
 

@@ -16,6 +16,7 @@ without the run-dependent ``seconds``.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -74,13 +75,31 @@ def real_cereal_box(shared_data: Path) -> eg.Grasp:
     return eg.Grasp.from_file(shared_data / "barrett-grasps" / "grasps" / name)
 
 
+def adroit_box(shared_data: Path) -> eg.Grasp:
+    """The Adroit hand (package gymnasium-robotics), fingers half bent, thumb across, a
+    4 x 6 x 6 cm box against the palm."""
+    joints = {f"{f}J{k}": 0.6 for f in ("FF", "MF", "RF", "LF") for k in (2, 1)}
+    hand = eg.hands.adroit({**joints, "THJ3": 0.8})
+    pose = _pose((0.005, -0.04, 0.48))
+    return eg.Grasp(hand, eg.objects.box((0.06, 0.04, 0.06)), pose, "adroit_box")
+
+
 #: name -> (grasp builder, needs the shared data)
 CASES: dict[str, tuple[Callable[[Path], eg.Grasp], bool]] = {
     "builtin_box": (builtin_box, False),
     "builtin_cylinder": (builtin_cylinder, False),
     "real_noise_grasp0": (real_noise_grasp0, True),
     "real_cereal_box": (real_cereal_box, True),
+    "adroit_box": (adroit_box, False),
 }
+#: Cases whose hand comes from an optional package: name -> that package's import name.
+NEEDS_PACKAGE = {"adroit_box": "gymnasium_robotics"}
+
+
+def package_missing(case: str) -> str | None:
+    """The optional package a case needs and this environment lacks, else None."""
+    name = NEEDS_PACKAGE.get(case)
+    return name if name and importlib.util.find_spec(name) is None else None
 
 
 def golden_path(case: str, backend: str) -> Path:
@@ -118,6 +137,9 @@ def main(argv: list[str] | None = None) -> int:
         for case in args.case or CASES:
             if CASES[case][1] and not have_data:
                 print(f"skip {case}: no shared data at {SHARED_DATA}", file=sys.stderr)
+                continue
+            if missing := package_missing(case):
+                print(f"skip {case}: the package {missing} is not installed", file=sys.stderr)
                 continue
             path = compute(case, backend).save(golden_path(case, backend))
             print(f"wrote {path.relative_to(GOLDEN_DIR.parents[1])}")
