@@ -59,10 +59,6 @@ def _signed_volumes(V: np.ndarray, F: np.ndarray, label: np.ndarray, n: int) -> 
     return np.bincount(label, np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0, minlength=n)
 
 
-def _fmt_shells(indices, shells) -> str:
-    return ", ".join(f"{i} ({shells[i]['vertices']} vertices)" for i in indices)
-
-
 def resolve_shells(
     vertices: np.ndarray,
     faces: np.ndarray,
@@ -144,167 +140,209 @@ def resolve_shells(
     return _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn, report)
 
 
+class _Shells:
+    """The shells of one mesh while they are resolved, and what was done to them.
+
+    Attributes
+    ----------
+    name : str
+        The mesh, in messages.
+    parts : list of (numpy.ndarray (k, 3) float64 m, numpy.ndarray (l, 3) int64)
+        Each shell's own vertices and faces (faces reversed once a shell is flipped).
+    rows : list of dict
+        Each shell's row of the report (``"role"`` empty until decided).
+    sign : numpy.ndarray, shape (n,), int
+        +1 for an outward shell, -1 for a reversed one (after flipping).
+    volumes : numpy.ndarray, shape (n,), float64, m^3
+        Signed volumes as given.
+    lo, hi : numpy.ndarray, shape (n, 3), float64, m
+        Each shell's bounding box.
+    actions : list of str
+        What was done, in words (the report's ``actions``, appended to).
+    """
+
+    def __init__(self, V, F, name, label, n_shells, volumes, actions) -> None:
+        order = np.argsort(label, kind="stable")
+        starts = np.searchsorted(label[order], np.arange(n_shells + 1))
+        self.name = name
+        self.parts = [compact(V, F[order[starts[i] : starts[i + 1]]]) for i in range(n_shells)]
+        self.rows = [
+            {"index": i, "vertices": len(p[0]), "faces": len(p[1]), "volume": float(volumes[i]),
+             "role": ""}
+            for i, p in enumerate(self.parts)
+        ]  # fmt: skip
+        self.sign = np.where(volumes > 0, 1, -1)
+        self.volumes = volumes
+        self.lo = np.array([p[0].min(0) for p in self.parts])
+        self.hi = np.array([p[0].max(0) for p in self.parts])
+        self.actions = actions
+
+    def inside(self, x: np.ndarray, j: int) -> bool:
+        """Whether the point ``x`` (3,) lies inside shell ``j``."""
+        if np.any(x < self.lo[j]) or np.any(x > self.hi[j]):
+            return False
+        return abs(winding_number(x, self.parts[j][0], self.parts[j][1])) > 0.5
+
+    def named(self, indices) -> str:
+        """The shells ``indices`` in messages."""
+        return ", ".join(f"{i} ({self.rows[i]['vertices']} vertices)" for i in indices)
+
+    def set_role(self, indices, role: str) -> None:
+        for i in indices:
+            self.rows[int(i)]["role"] = role
+
+
 def _resolve(V, F, name, label, n_shells, volumes, t, u, code, orientation, warn, report):
-    order = np.argsort(label, kind="stable")
-    starts = np.searchsorted(label[order], np.arange(n_shells + 1))
-    parts = [compact(V, F[order[starts[i] : starts[i + 1]]]) for i in range(n_shells)]
-    shells = [
-        {"index": i, "vertices": len(p[0]), "faces": len(p[1]), "volume": float(volumes[i]),
-         "role": ""}
-        for i, p in enumerate(parts)
-    ]  # fmt: skip
-    report["shells"] = shells
-    sign = np.where(volumes > 0, 1, -1)
+    shells = _Shells(V, F, name, label, n_shells, volumes, report["actions"])
+    report["shells"] = shells.rows
     # Clusters: shells linked by crossings or possible contacts.
     la, lb = label[t], label[u]
     graph = coo_matrix((np.ones(len(la)), (la, lb)), (n_shells, n_shells))
     n_clusters, cluster = connected_components(graph, directed=False)
     members = [np.flatnonzero(cluster == c) for c in range(n_clusters)]
-    lo = np.array([p[0].min(0) for p in parts])
-    hi = np.array([p[0].max(0) for p in parts])
-
-    def inside(x: np.ndarray, j: int) -> bool:
-        if np.any(x < lo[j]) or np.any(x > hi[j]):
-            return False
-        return abs(winding_number(x, parts[j][0], parts[j][1])) > 0.5
-
-    holders = _holders(parts, cluster, members, inside, lo, hi)
-    actions: list[str] = report["actions"]
-    # Inside-out bodies: a cluster of reversed shells held by nothing, with what it holds.
-    top_inverted = [
-        c for c in range(n_clusters) if not holders[c] and np.all(sign[members[c]] < 0)
-    ]
-    if top_inverted:
-        flip = {int(i) for c in top_inverted for i in members[c]}
-        flip |= {
-            int(i)
-            for c in range(n_clusters)
-            if any(h in flip for h in holders[c])
-            for i in members[c]
-        }
-        flip_list = sorted(flip)
-        if orientation == "refuse":
-            raise MeshError(
-                f"{name}: shell(s) {_fmt_shells(flip_list, shells)} are inside-out (negative "
-                "signed volume, inside no other shell); reverse their triangle winding, or "
-                "pass orientation='flip' to let exactgrasp do it."
-            )
-        for i in flip_list:
-            sign[i] = -sign[i]
-            parts[i] = (parts[i][0], parts[i][1][:, ::-1].copy())
-            shells[i]["role"] = "flipped"
-        actions.append(f"flipped inside-out shell(s) {_fmt_shells(flip_list, shells)}")
-    base = [int(sum(sign[j] for j in holders[c])) for c in range(n_clusters)]
-
-    def refuse(c: int, why: str) -> MeshError:
-        return MeshError(
-            f"{name}: shells {_fmt_shells(members[c], shells)} {why}; the solid they bound is "
-            "not resolved here. Make every body one outward closed shell (cavities as reversed "
-            "shells strictly inside it), e.g. with boolean unions and differences in a modeller "
-            "(Blender's Boolean modifier, MeshLab's 'Mesh Boolean')."
-        )
-
+    holders = _holders(shells, cluster, members)
+    _flip_inside_out(shells, members, holders, orientation)
     out: list[tuple[np.ndarray, np.ndarray]] = []
-    changed = bool(top_inverted) or bool(actions)
-    for c in range(n_clusters):
-        idx = members[c]
-        signs = sign[idx]
-        w = base[c]
-        held = sorted({h for h in holders[c]})
+    for c, idx in enumerate(members):
+        # The winding number around the cluster, from the shells that hold it.
+        w = int(sum(shells.sign[j] for j in holders[c]))
         if len(idx) == 1:
-            i = int(idx[0])
-            if (signs[0] > 0 and w == 0) or (signs[0] < 0 and w == 1):
-                if not shells[i]["role"]:
-                    shells[i]["role"] = (
-                        "cavity" if signs[0] < 0 else ("island" if held else "outer")
-                    )
-                out.append(parts[i])
-                continue
-            shells[i]["role"] = "redundant"
-            changed = True
-            what = (
-                "lies inside shell(s) " + _fmt_shells(held, shells)
-                if held
-                else "is inside no shell"
-            )
-            actions.append(
-                f"dropped shell {_fmt_shells([i], shells)}: it {what} and, with its "
-                f"orientation, bounds a region of winding number {w + int(signs[0])} "
-                f"against {w} around it, no boundary of the solid"
-            )
-            continue
-        changed = True
-        pos = [int(i) for i in idx if sign[i] > 0]
-        neg = [int(i) for i in idx if sign[i] < 0]
-        pairs = int(np.isin(la, idx).sum())
-        crossing = int(((code == CROSS) & np.isin(la, idx)).sum())
-        how = f"{crossing} crossing and {pairs - crossing} touching triangle pairs"
-        why = ""
-        if neg and pos:
-            if w != 0:
-                why = "mix crossing outward and reversed shells inside another shell"
-            pos_set = set(pos)
-            overlapping_pos = any(
-                label[a] in pos_set and label[b] in pos_set and label[a] != label[b]
-                for a, b in zip(t[np.isin(la, idx)], u[np.isin(la, idx)], strict=True)
-            ) or any(inside(parts[i][0][0], j) for i in pos for j in pos if i != j)
-            if overlapping_pos:
-                why = "mix reversed shells with outward shells that overlap"
-        elif (pos and w >= 1) or (neg and w <= 0):
-            for i in idx:
-                shells[int(i)]["role"] = "redundant"
-            actions.append(
-                f"dropped shells {_fmt_shells(idx, shells)} ({how}): they lie where the solid "
-                "already is (or is not), and bound no boundary of it"
-            )
-            continue
-        elif (pos and w < 0) or (neg and w >= 2):
-            why = f"cross each other where the winding number around them is {w}"
-        if why:
-            merged_v, merged_f = cut_cluster([parts[int(i)] for i in idx], w, refuse(c, why))
-            for i in idx:
-                shells[int(i)]["role"] = "merged"
-            actions.append(
-                f"cut shells {_fmt_shells(idx, shells)} ({how}, {why}) along their crossings "
-                f"into the boundary of the solid (signed volume "
-                f"{float(volumes[idx].sum()):.6g} -> {_signed_volume(merged_v, merged_f):.6g} m^3)"
-            )
-            if len(merged_f):
-                out.append((merged_v, merged_f))
-            continue
-        merged_v, merged_f = _merge(parts, pos, neg, name)
-        for i in idx:
-            shells[int(i)]["role"] = "merged"
-        volume = _signed_volume(merged_v, merged_f)
-        actions.append(
-            f"merged shells {_fmt_shells(idx, shells)} ({how}) into the solid they bound "
-            f"(signed volume {float(volumes[idx].sum()):.6g} -> {volume:.6g} m^3)"
-        )
-        if len(merged_f):
-            out.append((merged_v, merged_f))
-    report["actions"] = actions
-    if not changed:
+            part = _lone_shell(shells, int(idx[0]), w, sorted(set(holders[c])))
+        else:
+            in_cluster = np.isin(la, idx)
+            pair_labels = list(zip(la[in_cluster], lb[in_cluster], strict=True))
+            crossing = int((code[in_cluster] == CROSS).sum())
+            part = _resolve_cluster(shells, idx, w, pair_labels, crossing)
+        if part is not None and len(part[1]):
+            out.append(part)
+    if not shells.actions:
         return V, F, report
-    if out:
-        new_v, new_f = join_meshes(out)
-    else:
+    if not out:
         raise MeshError(
             f"{name}: resolving its {n_shells} shells leaves no solid (every shell is "
             "redundant); check the orientation of its shells."
         )
+    new_v, new_f = join_meshes(out)
     report["volume_after"] = _signed_volume(new_v, new_f)
     _warn_resolved(name, n_shells, report, warn)
     return new_v, new_f, report
 
 
-def _holders(parts, cluster, members, inside, lo, hi) -> list[list[int]]:
+def _flip_inside_out(shells: _Shells, members, holders, orientation: str) -> None:
+    """Flip (or refuse) the inside-out bodies: each cluster of reversed shells held by
+    nothing, with every cluster it holds."""
+    n_clusters = len(members)
+    top_inverted = [
+        c for c in range(n_clusters) if not holders[c] and np.all(shells.sign[members[c]] < 0)
+    ]
+    if not top_inverted:
+        return
+    flip = {int(i) for c in top_inverted for i in members[c]}
+    flip |= {
+        int(i) for c in range(n_clusters) if any(h in flip for h in holders[c]) for i in members[c]
+    }
+    flip_list = sorted(flip)
+    if orientation == "refuse":
+        raise MeshError(
+            f"{shells.name}: shell(s) {shells.named(flip_list)} are inside-out (negative "
+            "signed volume, inside no other shell); reverse their triangle winding, or "
+            "pass orientation='flip' to let exactgrasp do it."
+        )
+    for i in flip_list:
+        shells.sign[i] = -shells.sign[i]
+        shells.parts[i] = (shells.parts[i][0], shells.parts[i][1][:, ::-1].copy())
+    shells.set_role(flip_list, "flipped")
+    shells.actions.append(f"flipped inside-out shell(s) {shells.named(flip_list)}")
+
+
+def _lone_shell(shells: _Shells, i: int, w: int, held: list[int]):
+    """Shell ``i``, alone in its cluster inside winding number ``w``: kept when it is a
+    boundary of the solid (its mesh returned), else dropped (None)."""
+    sign = shells.sign[i]
+    if (sign > 0 and w == 0) or (sign < 0 and w == 1):
+        if not shells.rows[i]["role"]:
+            shells.rows[i]["role"] = "cavity" if sign < 0 else ("island" if held else "outer")
+        return shells.parts[i]
+    shells.rows[i]["role"] = "redundant"
+    what = "lies inside shell(s) " + shells.named(held) if held else "is inside no shell"
+    shells.actions.append(
+        f"dropped shell {shells.named([i])}: it {what} and, with its "
+        f"orientation, bounds a region of winding number {w + int(sign)} "
+        f"against {w} around it, no boundary of the solid"
+    )
+    return None
+
+
+def _resolve_cluster(shells: _Shells, idx: np.ndarray, w: int, pair_labels, crossing: int):
+    """The boundary of the solid that the crossing or touching shells ``idx`` bound inside
+    winding number ``w`` (their mesh, or None when they bound none of it): dropped, cut
+    along their crossings, or merged with manifold3d.
+
+    ``pair_labels`` holds the shells of each of the cluster's triangle pairs, ``crossing``
+    how many of them cross for certain."""
+    pos = [int(i) for i in idx if shells.sign[i] > 0]
+    neg = [int(i) for i in idx if shells.sign[i] < 0]
+    how = f"{crossing} crossing and {len(pair_labels) - crossing} touching triangle pairs"
+    if not (neg and pos) and ((pos and w >= 1) or (neg and w <= 0)):
+        shells.set_role(idx, "redundant")
+        shells.actions.append(
+            f"dropped shells {shells.named(idx)} ({how}): they lie where the solid "
+            "already is (or is not), and bound no boundary of it"
+        )
+        return None
+    why = _cut_reason(shells, pos, neg, w, pair_labels)
+    if why:
+        refusal = _unresolved(shells, idx, why)
+        merged_v, merged_f = cut_cluster([shells.parts[int(i)] for i in idx], w, refusal)
+        done = f"cut shells {shells.named(idx)} ({how}, {why}) along their crossings into the"
+        done += " boundary of the solid"
+    else:
+        merged_v, merged_f = _merge(shells.parts, pos, neg, shells.name)
+        done = f"merged shells {shells.named(idx)} ({how}) into the solid they bound"
+    shells.set_role(idx, "merged")
+    shells.actions.append(
+        f"{done} (signed volume {float(shells.volumes[idx].sum()):.6g} -> "
+        f"{_signed_volume(merged_v, merged_f):.6g} m^3)"
+    )
+    return merged_v, merged_f
+
+
+def _cut_reason(shells: _Shells, pos: list[int], neg: list[int], w: int, pair_labels) -> str:
+    """Why a cluster with a boundary of the solid in it is cut along its crossings rather than
+    merged with manifold3d (empty: merged): what a union less a union cannot resolve."""
+    if neg and pos:
+        pos_set = set(pos)
+        overlapping_pos = any(
+            a in pos_set and b in pos_set and a != b for a, b in pair_labels
+        ) or any(shells.inside(shells.parts[i][0][0], j) for i in pos for j in pos if i != j)
+        if overlapping_pos:
+            return "mix reversed shells with outward shells that overlap"
+        if w != 0:
+            return "mix crossing outward and reversed shells inside another shell"
+        return ""
+    if (pos and w < 0) or (neg and w >= 2):
+        return f"cross each other where the winding number around them is {w}"
+    return ""
+
+
+def _unresolved(shells: _Shells, idx, why: str) -> MeshError:
+    """The error of shells ``idx`` whose solid is not resolved here, for ``why``."""
+    return MeshError(
+        f"{shells.name}: shells {shells.named(idx)} {why}; the solid they bound is "
+        "not resolved here. Make every body one outward closed shell (cavities as reversed "
+        "shells strictly inside it), e.g. with boolean unions and differences in a modeller "
+        "(Blender's Boolean modifier, MeshLab's 'Mesh Boolean')."
+    )
+
+
+def _holders(shells: _Shells, cluster: np.ndarray, members) -> list[list[int]]:
     """The shells that hold each cluster: its surfaces meet none of theirs, so one point (a
-    vertex of the cluster) decides, by ``inside(x, shell)``."""
+    vertex of the cluster) decides, by `_Shells.inside`."""
     holders = []
     for c, idx in enumerate(members):
-        x = parts[idx[0]][0][0]
-        near = np.flatnonzero(np.all(lo <= x, axis=1) & np.all(x <= hi, axis=1))
-        holders.append([int(j) for j in near if cluster[j] != c and inside(x, j)])
+        x = shells.parts[idx[0]][0][0]
+        near = np.flatnonzero(np.all(shells.lo <= x, axis=1) & np.all(x <= shells.hi, axis=1))
+        holders.append([int(j) for j in near if cluster[j] != c and shells.inside(x, j)])
     return holders
 
 
