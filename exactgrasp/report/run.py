@@ -7,7 +7,7 @@ import os
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from exactgrasp.backends import get_backend
 from exactgrasp.report import figures as fig
@@ -103,6 +103,7 @@ def run_validation(
     command : str
         The command line, written into the report.
     log : callable
+        Called with a line of progress for each step (default `print`).
 
     Returns
     -------
@@ -124,7 +125,77 @@ def run_validation(
             "the exact backend is not installed here, so the estimator and descriptor-level "
             "comparisons were skipped and the noise tests ran with the voxel backend only."
         )
+    grasps = _read_grasps(barrett, config, cache_root, log, notes)
+    summary: dict[str, Any] = {"grasps": grasps.summary()}
+    findings: list[str] = []
+    drawn = [
+        (
+            fig.figure1(
+                config.main_sampler(), figures_dir / "figure1_paths.png", config.figure1_paths
+            ),
+            "Figure 1: sampled paths of a T-shaped object (union of two boxes), coloured by time.",
+        )
+    ]
+    if "exact" in backends:
+        drawn += _backends_compared(grasps, cache, config, figures_dir, log, summary, findings)
+    drawn += _noise_tests(grasps, cache, config, backends, figures_dir, log, summary, findings)
+    summary["findings"] = findings
+    summary["headline"] = headline(summary)
+    summary["meta"] = {
+        "command": command,
+        "data": str(Path(data_dir)),
+        "config": config.to_dict(),
+        "backends": backends,
+        "version": __version__,
+        "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "cpus": os.cpu_count(),
+        "seconds": time.perf_counter() - start,
+        "descriptors_computed": cache.computed,
+        "descriptors_from_cache": cache.loaded,
+        "compute": cache.compute_seconds,
+        "notes": notes,
+    }
+    figure_list = [(f"figures/{path.name}", caption) for path, caption in drawn]
+    write_json(summary, out / "summary.json")
+    write_markdown(summary, figure_list, out / "summary.md")
+    write_html(summary, figure_list, out / "index.html")
+    log(f"report: {out / 'index.html'} ({summary['meta']['seconds']:.0f} s)")
+    return summary
 
+
+class _Grasps(NamedTuple):
+    """The report's grasps: the adjusted cereal-box grasps, the spray-bottle grasp, the
+    grasps closed from study records (and the records skipped), and the noise test's."""
+
+    cereal: list[Case]
+    spray: Case
+    closed: list[Case]
+    skipped: list[dict[str, Any]]
+    noise: list[Case]
+
+    @property
+    def estimator(self) -> list[Case]:
+        """The grasps of the estimator's comparison: all but the skipped."""
+        return [*self.cereal, self.spray, *self.closed]
+
+    def summary(self) -> dict[str, Any]:
+        """The summary's ``grasps`` entry."""
+        return {
+            "estimator": [c.name for c in self.estimator],
+            "noise": [c.name for c in self.noise],
+            "closed": {c.name: c.notes for c in self.closed},
+            "skipped": self.skipped,
+            "description": _describe(
+                self.cereal, self.spray, self.closed, self.skipped, self.noise
+            ),
+        }
+
+
+def _read_grasps(
+    barrett: Path, config: ValidationConfig, cache_root: Path, log, notes: list[str]
+) -> _Grasps:
+    """Read the shared data's grasps and close the study records (cached under
+    ``cache_root/closing``); a shortfall of noise-test grasps is added to ``notes``."""
     log("grasps: reading the shared data and closing study records")
     cereal = cereal_cases(barrett, config.n_cereal, config.authors_samples)
     spray = spray_case(barrett, config.authors_samples)
@@ -143,110 +214,85 @@ def run_validation(
             f"only {len(noise)} grasps on different objects were available for the object-pose "
             f"noise test (asked for {config.n_noise_grasps})."
         )
-    cases = [*cereal, spray, *closed]
-    summary: dict[str, Any] = {
-        "grasps": {
-            "estimator": [c.name for c in cases],
-            "noise": [c.name for c in noise],
-            "closed": {c.name: c.notes for c in closed},
-            "skipped": skipped,
-            "description": _describe(cereal, spray, closed, skipped, noise),
-        }
-    }
-    findings: list[str] = []
-    figure_list: list[tuple[str, str]] = []
+    return _Grasps(cereal, spray, closed, skipped, noise)
 
-    def add_figure(path: Path, caption: str) -> None:
-        figure_list.append((f"figures/{path.name}", caption))
 
-    add_figure(
-        fig.figure1(
-            config.main_sampler(), figures_dir / "figure1_paths.png", config.figure1_paths
-        ),
-        "Figure 1: sampled paths of a T-shaped object (union of two boxes), coloured by time.",
-    )
-    if "exact" in backends:
-        est, arrays = estimator_report(
-            cases, cache, config, noise[: config.n_resolution_grasps], log
-        )
-        summary["estimator"] = est
-        findings += estimator_findings(est)
-        add_figure(
+def _backends_compared(
+    grasps: _Grasps, cache, config, figures_dir: Path, log, summary, findings
+) -> list[tuple[Path, str]]:
+    """The estimator (voxel against exact, pose by pose) and descriptor-level comparisons:
+    their numbers into ``summary`` and ``findings``, their figures returned with captions."""
+    resolution_grasps = grasps.noise[: config.n_resolution_grasps]
+    est, arrays = estimator_report(grasps.estimator, cache, config, resolution_grasps, log)
+    summary["estimator"] = est
+    findings += estimator_findings(est)
+    drawn = [
+        (
             fig.estimator_scatter(arrays, figures_dir / "estimator_scatter.png"),
             "Voxel estimate against exact volume, every pose of every grasp; right: "
             "relative error against the exact value.",
-        )
-        add_figure(
+        ),
+        (
             fig.error_by_step(est, arrays, figures_dir / "estimator_by_step.png"),
             "Relative error and false positives against the step along the paths.",
-        )
-        add_figure(
+        ),
+        (
             fig.error_histogram(arrays, figures_dir / "estimator_histogram.png"),
             "Histogram of the signed relative error, both surface weights.",
-        )
-        add_figure(
+        ),
+        (
             fig.resolution_grid(
                 arrays["resolution_grid"], figures_dir / "estimator_resolution.png"
             ),
             "Error and time against object and hand resolution.",
-        )
-        desc, matrices = descriptor_report(
-            arrays["names"], arrays["voxel_descriptors"], arrays["exact_descriptors"]
-        )
-        summary["descriptors"] = desc
-        findings += descriptor_findings(desc)
-        add_figure(
+        ),
+    ]
+    desc, matrices = descriptor_report(
+        arrays["names"], arrays["voxel_descriptors"], arrays["exact_descriptors"]
+    )
+    summary["descriptors"] = desc
+    findings += descriptor_findings(desc)
+    drawn.append(
+        (
             fig.distance_matrices(matrices, figures_dir / "descriptor_distances.png"),
             "L2 distance matrices from each backend, and every pair's distance with "
             "voxel against exact (L2 and L2 of differences).",
         )
+    )
+    return drawn
 
-    pose_summary, pose_arrays = object_noise_test(noise, cache, config, backends, log)
-    joint_summary, joint_arrays = joint_noise_test(spray, cache, config, backends, log)
+
+def _noise_tests(
+    grasps: _Grasps, cache, config, backends: list[str], figures_dir: Path, log, summary, findings
+) -> list[tuple[Path, str]]:
+    """The object-pose and joint noise tests: their numbers into ``summary`` and
+    ``findings``, their figures (the paper's Figs. 3 to 6) returned with captions."""
+    pose_summary, pose_arrays = object_noise_test(grasps.noise, cache, config, backends, log)
+    joint_summary, joint_arrays = joint_noise_test(grasps.spray, cache, config, backends, log)
     summary["noise"] = {"object_pose": pose_summary, "joints": joint_summary}
     findings += noise_findings(pose_summary, joint_summary)
     main = config.noise_samplers[0]
-    add_figure(
-        fig.within_between(pose_arrays, main, "l2", figures_dir / "noise_fig4.png"),
-        f"Object-pose noise (paper Fig. 4), {main} sampler: within- vs between-object L2 "
-        "distances, per backend and noise level.",
-    )
-    add_figure(
-        fig.per_grasp_spread(pose_summary, figures_dir / "noise_fig5.png"),
-        "Per-grasp within-object and per-pair between-object L2 distances, mean and standard "
-        f"deviation (paper Fig. 5), {main} sampler.",
-    )
     joint_pose = pose_summary.get(config.joint_sampler, {}).get("backends", {})
     reference = {b: min(v["min_between"] for v in r["l2"].values()) for b, r in joint_pose.items()}
-    add_figure(
-        fig.joint_noise(joint_arrays, reference, figures_dir / "noise_fig3_joints.png"),
-        f"Joint noise on the spray-bottle grasp (paper Fig. 3), {config.joint_sampler} sampler: "
-        "L2 distance to the unperturbed grasp per noise level.",
-    )
-    add_figure(
-        fig.presets(pose_arrays, list(config.noise_samplers), figures_dir / "noise_fig6.png"),
-        "The samplers compared (paper Fig. 6): within- vs between-object distances per sampler "
-        f"and backend, and L2 of differences for the {main} sampler.",
-    )
-
-    summary["findings"] = findings
-    summary["headline"] = headline(summary)
-    summary["meta"] = {
-        "command": command,
-        "data": str(Path(data_dir)),
-        "config": config.to_dict(),
-        "backends": backends,
-        "version": __version__,
-        "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
-        "cpus": os.cpu_count(),
-        "seconds": time.perf_counter() - start,
-        "descriptors_computed": cache.computed,
-        "descriptors_from_cache": cache.loaded,
-        "compute": cache.compute_seconds,
-        "notes": notes,
-    }
-    write_json(summary, out / "summary.json")
-    write_markdown(summary, figure_list, out / "summary.md")
-    write_html(summary, figure_list, out / "index.html")
-    log(f"report: {out / 'index.html'} ({summary['meta']['seconds']:.0f} s)")
-    return summary
+    return [
+        (
+            fig.within_between(pose_arrays, main, "l2", figures_dir / "noise_fig4.png"),
+            f"Object-pose noise (paper Fig. 4), {main} sampler: within- vs between-object L2 "
+            "distances, per backend and noise level.",
+        ),
+        (
+            fig.per_grasp_spread(pose_summary, figures_dir / "noise_fig5.png"),
+            "Per-grasp within-object and per-pair between-object L2 distances, mean and "
+            f"standard deviation (paper Fig. 5), {main} sampler.",
+        ),
+        (
+            fig.joint_noise(joint_arrays, reference, figures_dir / "noise_fig3_joints.png"),
+            f"Joint noise on the spray-bottle grasp (paper Fig. 3), {config.joint_sampler} "
+            "sampler: L2 distance to the unperturbed grasp per noise level.",
+        ),
+        (
+            fig.presets(pose_arrays, list(config.noise_samplers), figures_dir / "noise_fig6.png"),
+            "The samplers compared (paper Fig. 6): within- vs between-object distances per "
+            f"sampler and backend, and L2 of differences for the {main} sampler.",
+        ),
+    ]

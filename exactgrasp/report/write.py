@@ -39,95 +39,107 @@ def _md(text: str) -> str:
     return text.replace("|", "\\|")
 
 
-def tables(summary: dict[str, Any]) -> list[tuple[str, list[str], list[list[Any]]]]:
+#: A table of the report: its title, column headers and rows.
+Table = tuple[str, list[str], list[list[Any]]]
+
+
+def tables(summary: dict[str, Any]) -> list[Table]:
     """The report's tables: ``(title, header, rows)``."""
-    out = []
-    est = summary.get("estimator")
-    if est:
-        cols = (
-            "median_abs_rel",
-            "p95_abs_rel",
-            "max_abs_rel",
-            "mean_signed_rel",
-            "fraction_over",
-            "false_positive_rate",
-            "n_compared",
-        )
-        rows = [["all grasps", est["n_grasps"], *(est["overall"][c] for c in cols)]]
-        rows += [
-            [obj, v["n_grasps"], *(v[c] for c in cols)] for obj, v in est["by_object"].items()
+    noise = summary.get("noise", {})
+    return [
+        *_estimator_tables(summary.get("estimator")),
+        *_descriptor_tables(summary.get("descriptors")),
+        *_object_noise_tables(noise.get("object_pose", {})),
+        *_joint_noise_tables(noise.get("joints", {})),
+    ]
+
+
+def _estimator_tables(est: dict[str, Any] | None) -> list[Table]:
+    """Voxel against exact per pose, the resolution sweep and the surface weights."""
+    if not est:
+        return []
+    cols = (
+        "median_abs_rel",
+        "p95_abs_rel",
+        "max_abs_rel",
+        "mean_signed_rel",
+        "fraction_over",
+        "false_positive_rate",
+        "n_compared",
+    )
+    per_pose = [["all grasps", est["n_grasps"], *(est["overall"][c] for c in cols)]]
+    per_pose += [
+        [obj, v["n_grasps"], *(v[c] for c in cols)] for obj, v in est["by_object"].items()
+    ]
+    sweep = [
+        [
+            v["object_resolution"],
+            v["hand_resolution"],
+            v["median_abs_rel"],
+            v["p95_abs_rel"],
+            v["mean_signed_rel"],
+            v["false_positive_rate"],
+            v["seconds_per_descriptor"],
         ]
-        out.append(
-            (
-                "Voxel against exact, per pose (relative errors where exact > 1e-4)",
-                ["grasps", "n", *cols],
-                rows,
-            )
-        )
-        rows = [
+        for v in est["resolution"]["configs"].values()
+    ]
+    weights = [
+        [
+            k,
+            v["median_abs_rel"],
+            v["p95_abs_rel"],
+            v["mean_signed_rel"],
+            v["seconds_per_descriptor"],
+        ]
+        for k, v in est["surface_weight"].items()
+    ]
+    return [
+        (
+            "Voxel against exact, per pose (relative errors where exact > 1e-4)",
+            ["grasps", "n", *cols],
+            per_pose,
+        ),
+        (
+            "Resolution sweep",
             [
-                v["object_resolution"],
-                v["hand_resolution"],
-                v["median_abs_rel"],
-                v["p95_abs_rel"],
-                v["mean_signed_rel"],
-                v["false_positive_rate"],
-                v["seconds_per_descriptor"],
-            ]
-            for v in est["resolution"]["configs"].values()
-        ]
-        out.append(
-            (
-                "Resolution sweep",
-                [
-                    "object res.",
-                    "hand res.",
-                    "median |rel|",
-                    "p95 |rel|",
-                    "mean signed rel",
-                    "FP rate",
-                    "s / descriptor",
-                ],
-                rows,
-            )
+                "object res.",
+                "hand res.",
+                "median |rel|",
+                "p95 |rel|",
+                "mean signed rel",
+                "FP rate",
+                "s / descriptor",
+            ],
+            sweep,
+        ),
+        (
+            "Surface weights",
+            ["weight", "median |rel|", "p95 |rel|", "mean signed rel", "s / descriptor"],
+            weights,
+        ),
+    ]
+
+
+def _descriptor_tables(desc: dict[str, Any] | None) -> list[Table]:
+    """Voxel against exact at the level of descriptor distances."""
+    if not desc:
+        return []
+    rows = [
+        [k, desc[k]["spearman"], desc[k]["median_ratio"], desc[k]["nn_agreement"],
+         desc[k]["topk_overlap"]]
+        for k in ("l2", "l2_diff")
+    ]  # fmt: skip
+    return [
+        (
+            "Descriptor level: voxel vs exact distances",
+            ["distance", "Spearman", "median voxel/exact", "NN agreement", "top-k overlap"],
+            rows,
         )
-        rows = [
-            [
-                k,
-                v["median_abs_rel"],
-                v["p95_abs_rel"],
-                v["mean_signed_rel"],
-                v["seconds_per_descriptor"],
-            ]
-            for k, v in est["surface_weight"].items()
-        ]
-        out.append(
-            (
-                "Surface weights",
-                ["weight", "median |rel|", "p95 |rel|", "mean signed rel", "s / descriptor"],
-                rows,
-            )
-        )
-    desc = summary.get("descriptors")
-    if desc:
-        rows = [
-            [
-                k,
-                desc[k]["spearman"],
-                desc[k]["median_ratio"],
-                desc[k]["nn_agreement"],
-                desc[k]["topk_overlap"],
-            ]
-            for k in ("l2", "l2_diff")
-        ]
-        out.append(
-            (
-                "Descriptor level: voxel vs exact distances",
-                ["distance", "Spearman", "median voxel/exact", "NN agreement", "top-k overlap"],
-                rows,
-            )
-        )
-    noise = summary.get("noise", {}).get("object_pose", {})
+    ]
+
+
+def _object_noise_tables(noise: dict[str, Any]) -> list[Table]:
+    """The object-pose noise test: one row per sampler, backend, distance and level."""
     rows = []
     for label in noise.get("samplers", []):
         for backend, kinds in noise[label]["backends"].items():
@@ -138,25 +150,29 @@ def tables(summary: dict[str, Any]) -> list[tuple[str, list[str], list[list[Any]
                          v["max_within"], v["min_between"], v["overlap_within"],
                          v["overlap_between"], v["auc"]]
                     )  # fmt: skip
-    if rows:
-        out.append(
-            ("Object-pose noise test: within- vs between-object distances",
-             ["sampler", "backend", "distance", "level", "max within", "min between",
-              "within in overlap", "between in overlap", "AUC"], rows)
-        )  # fmt: skip
-    joints = summary.get("noise", {}).get("joints", {})
+    if not rows:
+        return []
+    return [
+        ("Object-pose noise test: within- vs between-object distances",
+         ["sampler", "backend", "distance", "level", "max within", "min between",
+          "within in overlap", "between in overlap", "AUC"], rows)
+    ]  # fmt: skip
+
+
+def _joint_noise_tables(joints: dict[str, Any]) -> list[Table]:
+    """The joint noise test: one row per backend and noise level."""
     rows = []
     for backend, entry in joints.get("backends", {}).items():
         for level, v in entry["levels"].items():
             rows.append([backend, f"{float(level) * 100:g} %", v["n"], v["mean"], v["median"],
                          v["max"]])  # fmt: skip
-    if rows:
-        out.append(
-            (f"Joint noise: L2 distance to the unperturbed {joints['grasp']} grasp "
-             f"({joints['sampler']} sampler)",
-             ["backend", "noise", "draws", "mean", "median", "max"], rows)
-        )  # fmt: skip
-    return out
+    if not rows:
+        return []
+    return [
+        (f"Joint noise: L2 distance to the unperturbed {joints['grasp']} grasp "
+         f"({joints['sampler']} sampler)",
+         ["backend", "noise", "draws", "mean", "median", "max"], rows)
+    ]  # fmt: skip
 
 
 def provenance(meta: dict[str, Any]) -> str:
