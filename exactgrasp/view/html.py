@@ -106,77 +106,90 @@ def figure(scene: Scene) -> Any:
         group.
     """
     go = plotly_go()
-    traces = []
-    for mesh in scene.meshes:
-        traces.append(
-            _mesh_trace(
-                go,
-                mesh,
-                opacity=0.55 if mesh.role == "object" else 1.0,
-                group=mesh.role,
-                lighting={"ambient": 0.55, "diffuse": 0.8, "specular": 0.15},
-            )
+    traces = [
+        _mesh_trace(
+            go,
+            mesh,
+            opacity=0.55 if mesh.role == "object" else 1.0,
+            group=mesh.role,
+            lighting={"ambient": 0.55, "diffuse": 0.8, "specular": 0.15},
         )
-    for ghost in scene.ghosts:
-        traces.append(_mesh_trace(go, ghost, opacity=GHOST_OPACITY, group="ghost"))
-    for axis in scene.axes:
-        ends = np.stack([np.zeros(3), axis.tip])
-        traces.append(
-            go.Scatter3d(
-                x=ends[:, 0],
-                y=ends[:, 1],
-                z=ends[:, 2],
-                mode="lines+text",
-                text=["", axis.label],
-                textposition="middle right",
-                textfont={"color": axis.color, "size": 16},
-                line={"color": axis.color, "width": 7},
-                name=axis.name,
-                showlegend=False,
-                legendgroup="frame",
-                hovertemplate=f"{axis.name}<extra></extra>",
-            )
-        )
-    for k, path in enumerate(scene.paths):
-        colors = {"color": path.times, "colorscale": COLORSCALE, "cmin": 0.0, "cmax": scene.t_max}
-        traces.append(
-            go.Scatter3d(
-                x=path.points[:, 0],
-                y=path.points[:, 1],
-                z=path.points[:, 2],
-                mode="lines+markers",
-                line={**colors, "width": 5},
-                marker={
-                    **colors,
-                    "size": np.where(path.at_step, STEP_MARKER, 0.0),
-                    "showscale": k == 0,
-                    "colorbar": {
-                        "title": {"text": "time t along the path", "side": "top"},
-                        "orientation": "h",
-                        "len": 0.45,
-                        "thickness": 14,
-                        "x": 0.45,
-                        "y": 0.02,
-                        "yanchor": "bottom",
-                    },
-                },
-                name=path.name,
-                showlegend=False,
-                legendgroup=f"paths {path.kind}",
-                customdata=np.column_stack([path.times, path.points * scene.mm_per_unit]),
-                hovertemplate=(
-                    f"{path.name}<br>t = %{{customdata[0]:.3f}}<br>centre (mm): "
-                    "%{customdata[1]:.1f}, %{customdata[2]:.1f}, %{customdata[3]:.1f}"
-                    "<extra></extra>"
-                ),
-            )
-        )
+        for mesh in scene.meshes
+    ]
+    traces += [
+        _mesh_trace(go, ghost, opacity=GHOST_OPACITY, group="ghost") for ghost in scene.ghosts
+    ]
+    traces += [_axis_trace(go, axis) for axis in scene.axes]
+    traces += [
+        _path_trace(go, scene, path, with_scale=k == 0) for k, path in enumerate(scene.paths)
+    ]
     traces.extend(_legend(go, scene))
     fig = go.Figure(traces)
+    fig.update_layout(**_layout(scene))
+    return fig
+
+
+def _axis_trace(go, axis):
+    """A ``Scatter3d`` trace of one axis of the canonical frame: a line and its label."""
+    ends = np.stack([np.zeros(3), axis.tip])
+    return go.Scatter3d(
+        x=ends[:, 0],
+        y=ends[:, 1],
+        z=ends[:, 2],
+        mode="lines+text",
+        text=["", axis.label],
+        textposition="middle right",
+        textfont={"color": axis.color, "size": 16},
+        line={"color": axis.color, "width": 7},
+        name=axis.name,
+        showlegend=False,
+        legendgroup="frame",
+        hovertemplate=f"{axis.name}<extra></extra>",
+    )
+
+
+def _path_trace(go, scene: Scene, path, *, with_scale: bool):
+    """A ``Scatter3d`` trace of one path: the object's centre coloured by time, markers at
+    the sampler's steps; ``with_scale`` draws the time colour bar (once per figure)."""
+    colors = {"color": path.times, "colorscale": COLORSCALE, "cmin": 0.0, "cmax": scene.t_max}
+    return go.Scatter3d(
+        x=path.points[:, 0],
+        y=path.points[:, 1],
+        z=path.points[:, 2],
+        mode="lines+markers",
+        line={**colors, "width": 5},
+        marker={
+            **colors,
+            "size": np.where(path.at_step, STEP_MARKER, 0.0),
+            "showscale": with_scale,
+            "colorbar": {
+                "title": {"text": "time t along the path", "side": "top"},
+                "orientation": "h",
+                "len": 0.45,
+                "thickness": 14,
+                "x": 0.45,
+                "y": 0.02,
+                "yanchor": "bottom",
+            },
+        },
+        name=path.name,
+        showlegend=False,
+        legendgroup=f"paths {path.kind}",
+        customdata=np.column_stack([path.times, path.points * scene.mm_per_unit]),
+        hovertemplate=(
+            f"{path.name}<br>t = %{{customdata[0]:.3f}}<br>centre (mm): "
+            "%{customdata[1]:.1f}, %{customdata[2]:.1f}, %{customdata[3]:.1f}"
+            "<extra></extra>"
+        ),
+    )
+
+
+def _layout(scene: Scene) -> dict[str, Any]:
+    """The figure's layout: title with the unit, axis titles, camera, legend."""
     mm = f"unit = {scene.mm_per_unit:.3g} mm"
     titles = {"x": f"x ({mm})", "y": f"y, up ({mm})", "z": f"z, out of the palm ({mm})"}
     units = f"canonical frame: 1 unit = {scene.mm_per_unit:.3g} mm (half the palm frame's depth)"
-    fig.update_layout(
+    return dict(
         title={"text": f"{scene.title}<br><sup>{units}</sup>", "font": {"size": 14}},
         scene={
             "aspectmode": "data",
@@ -188,7 +201,6 @@ def figure(scene: Scene) -> Any:
         margin={"l": 0, "r": 0, "t": 50, "b": 0},
         paper_bgcolor="white",
     )
-    return fig
 
 
 def write_html(scene: Scene, path: str | os.PathLike) -> Path:
