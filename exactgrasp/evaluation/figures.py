@@ -11,14 +11,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-COLOURS = {"voxel": "tab:orange", "exact": "tab:blue"}
-
-
-def _save(fig, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return path
+from exactgrasp.evaluation.write import finish_roc
+from exactgrasp.report.figures import BACKEND_COLOURS, save_figure
 
 
 def roc_figure(clusters: dict, default: str, path: Path) -> Path:
@@ -32,12 +26,14 @@ def roc_figure(clusters: dict, default: str, path: Path) -> Path:
         ax.plot(
             e["curve"]["fpr"], e["curve"]["tpr"], "--", lw=1.1, label=f"{name}: {e['auc']:.3f}"
         )
-    ax.plot([0, 1], [0, 1], ":", color="grey", lw=0.8)
-    ax.set_xlabel("different-cluster pairs called same")
-    ax.set_ylabel("same-cluster pairs called same")
-    ax.set_title(f"cereal box, {clusters['n_pairs']} pairs ({clusters['n_same']} same)")
-    ax.legend(fontsize=7, loc="lower right")
-    return _save(fig, path)
+    return finish_roc(
+        fig,
+        ax,
+        path,
+        f"cereal box, {clusters['n_pairs']} pairs ({clusters['n_same']} same)",
+        x_label="different-cluster pairs called same",
+        y_label="same-cluster pairs called same",
+    )
 
 
 def auc_bars(clusters: dict, path: Path, title: str = "") -> Path:
@@ -54,7 +50,7 @@ def auc_bars(clusters: dict, path: Path, title: str = "") -> Path:
         hi = np.array([rows[n]["high"] for n in names])
         ax.errorbar(
             a, y + offset, xerr=[a - lo, hi - a], fmt="o", ms=4, capsize=2,
-            color=COLOURS[backend], label=backend,
+            color=BACKEND_COLOURS[backend], label=backend,
         )  # fmt: skip
     base = list(clusters["baselines"])
     yb = len(names) + np.arange(len(base)) + 0.5
@@ -69,7 +65,7 @@ def auc_bars(clusters: dict, path: Path, title: str = "") -> Path:
     ax.set_xlabel("AUC on the cereal-box clusters (95% interval, grasps resampled)")
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8, loc="lower left")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def sampling_figure(sampling: dict, path: Path) -> Path:
@@ -88,8 +84,8 @@ def sampling_figure(sampling: dict, path: Path) -> Path:
         a = np.array([r["auc"]["auc"] for r in mine])
         lo = np.array([r["auc"]["low"] for r in mine])
         hi = np.array([r["auc"]["high"] for r in mine])
-        axes[0].errorbar(t, a, yerr=[a - lo, hi - a], fmt="o-", capsize=2, color=COLOURS[backend],
-                         label=backend)  # fmt: skip
+        axes[0].errorbar(t, a, yerr=[a - lo, hi - a], fmt="o-", capsize=2,
+                         color=BACKEND_COLOURS[backend], label=backend)  # fmt: skip
         for r, x, y in zip(mine, t, a, strict=True):
             axes[0].annotate(f"{r['seconds_per_grasp']:.2g} s", (x, y), fontsize=7,
                              xytext=(3, 3), textcoords="offset points")  # fmt: skip
@@ -106,7 +102,7 @@ def sampling_figure(sampling: dict, path: Path) -> Path:
     axes[1].set_xlabel("poses per grasp (voxel)")
     axes[1].set_ylabel("noise test: median between / median within")
     axes[1].legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def steps_figure(sampling: dict, path: Path) -> Path:
@@ -121,10 +117,10 @@ def steps_figure(sampling: dict, path: Path) -> Path:
     a = np.array([r["auc"]["auc"] for r in rows])
     lo = np.array([r["auc"]["low"] for r in rows])
     hi = np.array([r["auc"]["high"] for r in rows])
-    ax.errorbar(s, a, yerr=[a - lo, hi - a], fmt="o-", capsize=2, color=COLOURS["voxel"])
+    ax.errorbar(s, a, yerr=[a - lo, hi - a], fmt="o-", capsize=2, color=BACKEND_COLOURS["voxel"])
     ax.set_xlabel("steps per path (474 paths)")
     ax.set_ylabel(f"cluster AUC, {sampling['distance']}")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def hands_figure(hands: dict[str, Any], path: Path) -> Path:
@@ -146,4 +142,4 @@ def hands_figure(hands: dict[str, Any], path: Path) -> Path:
     ax.set_xlabel("AUC: same placement across hands against different placements in one hand")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.invert_yaxis()
-    return _save(fig, path)
+    return save_figure(fig, path)

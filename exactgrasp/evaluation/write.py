@@ -13,8 +13,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 from exactgrasp.evaluation.evaluate import EvaluationResult
+from exactgrasp.report.figures import save_figure
 
-__all__ = ["auc_table", "roc_figure", "write_evaluation"]
+__all__ = ["auc_table", "finish_roc", "roc_figure", "write_evaluation"]
 
 
 def roc_figure(result: EvaluationResult, path: Path, names: list[str] | None = None) -> Path:
@@ -24,15 +25,25 @@ def roc_figure(result: EvaluationResult, path: Path, names: list[str] | None = N
         ev = result.evaluations[name]
         style = "--" if name.startswith("baseline") else "-"
         ax.plot(*ev.curve, style, label=f"{name}: {ev.auc:.3f}", lw=1.4)
+    return finish_roc(
+        fig,
+        ax,
+        path,
+        f"{len(result.pairs)} pairs, {result.pairs.n_same} same",
+        x_label="false positive rate (different pairs called same)",
+        y_label="true positive rate (same pairs called same)",
+    )
+
+
+def finish_roc(fig, ax, path: Path, title: str, *, x_label: str, y_label: str) -> Path:
+    """Draw chance's diagonal, name the axes, title and legend an ROC plot, and write its
+    figure to the PNG file ``path`` (returned)."""
     ax.plot([0, 1], [0, 1], ":", color="grey", lw=0.8)
-    ax.set_xlabel("false positive rate (different pairs called same)")
-    ax.set_ylabel("true positive rate (same pairs called same)")
-    ax.set_title(f"{len(result.pairs)} pairs, {result.pairs.n_same} same")
+    ax.set_xlabel(x_label)
+    ax.set_ylabel(y_label)
+    ax.set_title(title)
     ax.legend(fontsize=7, loc="lower right")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def _fmt(x: float) -> str:

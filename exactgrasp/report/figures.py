@@ -21,7 +21,9 @@ from exactgrasp.report.estimator import ZERO
 BACKEND_COLOURS = {"voxel": "tab:orange", "exact": "tab:blue"}
 
 
-def _save(fig, path: Path) -> Path:
+def save_figure(fig, path: Path) -> Path:
+    """Write a matplotlib figure to the PNG file ``path`` (its folder made), close it, and
+    return ``path``: one resolution and trim for every figure of the reports."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
@@ -68,7 +70,7 @@ def figure1(sampler, path: Path, n_paths: int = 8) -> Path:
     mappable = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
     fig.colorbar(mappable, ax=ax, shrink=0.6, label="time t along the path")
     ax.set_title(f"{len(picks)} of {sampler.n_paths} sampled paths of a T-shaped object")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def estimator_scatter(arrays: dict[str, Any], path: Path) -> Path:
@@ -114,7 +116,7 @@ def estimator_scatter(arrays: dict[str, Any], path: Path) -> Path:
     ax.set_xlabel("exact intersection / hand volume")
     ax.set_ylabel("(voxel - exact) / exact")
     ax.set_title(f"relative error where exact > {RELATIVE_FLOOR:g}")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def error_by_step(summary: dict[str, Any], arrays: dict[str, Any], path: Path) -> Path:
@@ -149,7 +151,7 @@ def error_by_step(summary: dict[str, Any], arrays: dict[str, Any], path: Path) -
     ax.set_xlabel("time t along the path")
     ax.set_ylabel("share of zero-overlap poses with voxel > 0")
     ax.set_title("false positives per step")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def error_histogram(arrays: dict[str, Any], path: Path) -> Path:
@@ -171,7 +173,7 @@ def error_histogram(arrays: dict[str, Any], path: Path) -> Path:
     ax.set_ylabel("poses")
     ax.set_title(f"relative error, poses where exact > {RELATIVE_FLOOR:g}")
     ax.legend()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def resolution_grid(grid: dict[str, Any], path: Path) -> Path:
@@ -202,7 +204,7 @@ def resolution_grid(grid: dict[str, Any], path: Path) -> Path:
         ax.set_ylabel("object resolution")
         ax.set_title(title, fontsize=10)
         fig.colorbar(image, ax=ax, shrink=0.8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def distance_matrices(matrices: dict[str, np.ndarray], path: Path) -> Path:
@@ -227,7 +229,7 @@ def distance_matrices(matrices: dict[str, np.ndarray], path: Path) -> Path:
         ax.set_xlabel(f"{kind} distance, exact")
         ax.set_ylabel(f"{kind} distance, voxel")
         ax.set_title(f"pairs of grasps, {kind}")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def within_between(noise: dict[str, Any], preset: str, kind: str, path: Path) -> Path:
@@ -249,7 +251,7 @@ def within_between(noise: dict[str, Any], preset: str, kind: str, path: Path) ->
             ax.set_xlabel(f"{kind} distance")
             ax.set_ylabel("pairs")
             ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def per_grasp_spread(summary: dict[str, Any], path: Path) -> Path:
@@ -286,7 +288,7 @@ def per_grasp_spread(summary: dict[str, Any], path: Path) -> Path:
                 fontsize=9,
             )
             ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def joint_noise(arrays: dict[str, Any], reference: dict[str, float], path: Path) -> Path:
@@ -312,7 +314,7 @@ def joint_noise(arrays: dict[str, Any], reference: dict[str, float], path: Path)
         ax.set_xlabel("joint noise (fraction of each joint's range)")
         ax.set_ylabel("L2 distance to the unperturbed grasp")
         ax.set_title(f"spray-bottle grasp, {backend}")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def presets(noise: dict[str, Any], preset_names: list[str], path: Path) -> Path:
@@ -350,4 +352,4 @@ def presets(noise: dict[str, Any], preset_names: list[str], path: Path) -> Path:
             ax.set_title(f"{backend}, {preset}, {kind}", fontsize=9)
             ax.set_xlabel("distance")
             ax.legend(fontsize=6)
-    return _save(fig, path)
+    return save_figure(fig, path)
