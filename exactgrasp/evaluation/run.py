@@ -103,6 +103,8 @@ def build_report(
     command : str
         Written into the report.
     log : callable
+        Called with a line for each section computed and for the report written (default
+        `print`).
     sections : tuple of str, optional
         Compute only these of `SECTIONS` (from their cache unless ``fresh``) and redraw only
         their figures; the other sections' numbers are read from ``out/summary.json``, which
@@ -111,7 +113,7 @@ def build_report(
     Returns
     -------
     dict
-        The summary written to ``summary.json``.
+        The summary written to ``summary.json``, which leaves out its ROC curves.
     """
     start = time.perf_counter()
     out, cache = Path(out), Path(cache)

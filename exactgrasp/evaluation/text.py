@@ -24,6 +24,20 @@ def _ci(e: dict) -> str:
     return f"{_f(e['auc'])} ({_f(e['low'])} .. {_f(e['high'])})"
 
 
+def _table_head(*columns: str) -> list[str]:
+    """The first two lines of a Markdown table: the column names and the separator."""
+    return ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+
+
+def _figures(*figures: tuple[str, str]) -> list[str]:
+    """Markdown lines of figures ``(alt text, file in figures/)``, each after a blank line,
+    and a blank line after the last."""
+    lines = [""]
+    for alt, file in figures:
+        lines += [f"![{alt}](figures/{file})", ""]
+    return lines
+
+
 def smallest_within_interval(rows: list[dict], backend: str) -> dict[str, Any] | None:
     """The fewest-path sampler (9 steps) whose AUC reaches the largest sampler's lower bound.
 
@@ -45,13 +59,12 @@ def smallest_within_interval(rows: list[dict], backend: str) -> dict[str, Any] |
     return {"smallest": largest, "largest": largest}
 
 
-def _clusters(s: dict, default: str) -> list[str]:
+def _clusters(s: dict) -> list[str]:
+    default = s["default"]["default"]
     c = s["clusters"]
     vox, ex = c["backends"]["voxel"]["distances"], c["backends"]["exact"]["distances"]
     d = vox[default]
     lines = [
-        "## 1. The authors' clusters",
-        "",
         f"The {c['n_grasps']} cereal-box contact grasps of the shared data carry the cluster of "
         f"the study they came from; all {c['n_pairs']} pairs, {c['n_same']} of them in one "
         "cluster. AUC: the probability that a pair from different clusters is farther apart "
@@ -60,8 +73,7 @@ def _clusters(s: dict, default: str) -> list[str]:
         "sharing a grasp are not independent), seed 0. Sampler: the balanced preset "
         "(474 paths x 9 steps).",
         "",
-        "| distance | voxel | exact | voxel, minus L2's AUC (paired interval) |",
-        "|---|---|---|---|",
+        *_table_head("distance", "voxel", "exact", "voxel, minus L2's AUC (paired interval)"),
     ]
     for name in vox:
         mark = " **(default)**" if name == default else ""
@@ -90,18 +102,13 @@ def _clusters(s: dict, default: str) -> list[str]:
         "",
         f"Per cluster (pairs with a grasp in the cluster), {default}, voxel:",
         "",
-        "| cluster | AUC | same pairs | different pairs |",
-        "|---|---|---|---|",
+        *_table_head("cluster", "AUC", "same pairs", "different pairs"),
     ]
     for g, e in sorted(d["groups"].items(), key=lambda kv: int(kv[0])):
         lines.append(f"| {g} | {_f(e['auc'])} | {e['n_same']} | {e['n_different']} |")
-    lines += [
-        "",
-        "![ROC curves](figures/roc-clusters.png)",
-        "",
-        "![AUC of every distance](figures/auc-clusters.png)",
-        "",
-    ]
+    lines += _figures(
+        ("ROC curves", "roc-clusters.png"), ("AUC of every distance", "auc-clusters.png")
+    )
     return lines
 
 
@@ -110,15 +117,12 @@ def _noise(s: dict) -> list[str]:
     keys = list(levels)
     names = list(levels[keys[0]])
     lines = [
-        "## 2. The noise test, for every distance",
-        "",
         "The paper's object-pose noise test (`exactgrasp.report`): six grasps on six objects "
         f"({', '.join(s['noise']['grasps'])}), six perturbed copies each at each of the two "
         "noise levels, voxel backend, balanced preset. AUC of within-grasp against "
         "between-grasp distances, and the ratio of their medians (larger separates more).",
         "",
-        "| distance |" + "".join(f" {k}: AUC | {k}: ratio |" for k in keys),
-        "|---|" + "---|---|" * len(keys),
+        *_table_head("distance", *(f"{k}: {what}" for k in keys for what in ("AUC", "ratio"))),
     ]
     for n in names:
         cells = "".join(
@@ -133,13 +137,13 @@ def _noise(s: dict) -> list[str]:
 def _default(s: dict) -> list[str]:
     d = s["default"]
     lines = [
-        "## 3. The default distance",
-        "",
         "Rule: " + " ".join(d["rule"].split()),
         "",
-        "| distance | noise-test AUC at least 0.99 at both levels "
-        "| cluster AUC, mean of backends |",
-        "|---|---|---|",
+        *_table_head(
+            "distance",
+            "noise-test AUC at least 0.99 at both levels",
+            "cluster AUC, mean of backends",
+        ),
     ]
     for r in d["rows"]:
         lines.append(
@@ -152,8 +156,6 @@ def _default(s: dict) -> list[str]:
 def _sampling(s: dict) -> list[str]:
     sm = s["sampling"]
     lines = [
-        "## 4. Sampling rate against cost",
-        "",
         f"Distance {sm['distance']}. Seconds: the descriptor's own recorded computation time, "
         "mean per grasp, on two cores shared with other work. They are rough: a voxel row "
         "includes whatever one-off cost (compiling, the hand's grid) fell to it, so the voxel "
@@ -162,9 +164,17 @@ def _sampling(s: dict) -> list[str]:
         "cost. Noise ratio: median between-grasp over median within-grasp distance at the two "
         "noise levels (voxel).",
         "",
-        "| sampler | paths | steps | backend | s / grasp | cluster AUC | L2 AUC "
-        "| noise: AUC | noise: ratio of medians |",
-        "|---|---|---|---|---|---|---|---|---|",
+        *_table_head(
+            "sampler",
+            "paths",
+            "steps",
+            "backend",
+            "s / grasp",
+            "cluster AUC",
+            "L2 AUC",
+            "noise: AUC",
+            "noise: ratio of medians",
+        ),
     ]
     for r in sm["rows"]:
         noise_auc = noise = ""
@@ -205,13 +215,10 @@ def _sampling(s: dict) -> list[str]:
             f"0.99 or above at both levels (the default's own qualifying bar) is "
             f"**{r['label']}** ({r['n_paths']} paths, {r['n_poses']} poses per grasp)."
         )
-    lines += [
-        "",
-        "![AUC and noise separation against poses](figures/sampling.png)",
-        "",
-        "![AUC against steps per path](figures/steps.png)",
-        "",
-    ]
+    lines += _figures(
+        ("AUC and noise separation against poses", "sampling.png"),
+        ("AUC against steps per path", "steps.png"),
+    )
     return lines
 
 
@@ -220,14 +227,11 @@ def _raw(s: dict) -> list[str]:
     a = r["adjustment"]
     vox = r["backends"]["voxel"]["distances"]
     lines = [
-        "## 5. Raw study records against contact-adjusted grasps",
-        "",
         "The same 34 grasps as recorded in the study (penetrating the box) instead of adjusted "
         "to contact; same clusters, same sampler, voxel backend (the exact backend's cost on "
         "two shared cores kept it to section 1).",
         "",
-        "| distance | adjusted | raw |",
-        "|---|---|---|",
+        *_table_head("distance", "adjusted", "raw"),
     ]
     for name in vox:
         lines.append(f"| {name} | {_f(r['adjusted_reference'][name])} | {_ci(vox[name])} |")
@@ -243,11 +247,8 @@ def _raw(s: dict) -> list[str]:
         f"{a['fraction_of_pairs_closer_than_median_adjustment']:.0%} of those pairs are closer "
         "than a typical adjustment moves a grasp. Median of the largest descriptor value: raw "
         f"{_f(a['max_value_raw_median'])}, adjusted {_f(a['max_value_adjusted_median'])}.",
-        "",
-        "![AUC of every distance, raw records](figures/auc-raw.png)",
-        "",
     ]
-    return lines
+    return lines + _figures(("AUC of every distance, raw records", "auc-raw.png"))
 
 
 def _against_chance(e: dict) -> str:
@@ -269,8 +270,6 @@ def _hands(s: dict) -> list[str]:
         return " / ".join(names.get(x, x) for x in group.split(" / "))
 
     lines = [
-        "## 6. Different hand geometry",
-        "",
         "Hands: the Barrett of the shared data, the built-in parallel gripper and the built-in "
         "Adroit five-finger hand (`eg.hands.adroit()`: the model file of the package "
         "`gymnasium-robotics`, MIT licence, installed with `exactgrasp[hands]`; its "
@@ -286,8 +285,7 @@ def _hands(s: dict) -> list[str]:
         "Barrett clusters: each hand's own grasps, labelled with the cluster of the Barrett "
         "grasp they copy, hand-volume normalisation.",
         "",
-        "| hand | placements kept | hand volume | AUC on the Barrett clusters |",
-        "|---|---|---|---|",
+        *_table_head("hand", "placements kept", "hand volume", "AUC on the Barrett clusters"),
     ]
     for label in h["hands"]:
         lines.append(
@@ -303,9 +301,10 @@ def _hands(s: dict) -> list[str]:
         "the volume of the hand's convex hull instead; `own maximum` each descriptor over its "
         "largest value.",
         "",
-        "| normalisation |"
-        + "".join(f" {shown(g)} ({e['n_placements']} placements) |" for g, e in groups.items()),
-        "|---|" + "---|" * len(groups),
+        *_table_head(
+            "normalisation",
+            *(f"{shown(g)} ({e['n_placements']} placements)" for g, e in groups.items()),
+        ),
     ]
     for how in hows:
         cells = "".join(
@@ -317,8 +316,7 @@ def _hands(s: dict) -> list[str]:
         "",
         "Median distances (the default distance), same placement against pairs within each hand:",
         "",
-        "| hands | normalisation | same placement | within each hand |",
-        "|---|---|---|---|",
+        *_table_head("hands", "normalisation", "same placement", "within each hand"),
     ]
     for g, e in groups.items():
         for how in hows:
@@ -340,13 +338,23 @@ def _hands(s: dict) -> list[str]:
             f"{_against_chance(plain)}; the best normalisation, {best}, {_ci(top)}, "
             f"{_against_chance(top)}."
         )
-    lines += ["", "![Across-hand AUC by normalisation](figures/hands.png)", ""]
+    lines += _figures(("Across-hand AUC by normalisation", "hands.png"))
     return lines
+
+
+#: The report's sections in order: title, and the Markdown lines under it.
+_SECTIONS = (
+    ("The authors' clusters", _clusters),
+    ("The noise test, for every distance", _noise),
+    ("The default distance", _default),
+    ("Sampling rate against cost", _sampling),
+    ("Raw study records against contact-adjusted grasps", _raw),
+    ("Different hand geometry", _hands),
+)
 
 
 def report_markdown(summary: dict[str, Any]) -> str:
     """The report as Markdown text."""
-    default = summary["default"]["default"]
     head = [
         "# What the descriptor tells you: the report",
         "",
@@ -364,12 +372,7 @@ def report_markdown(summary: dict[str, Any]) -> str:
         ]
     if summary.get("quick"):
         head += ["**Quick run: small samplers, few replicates. Not the committed numbers.**", ""]
-    body = (
-        _clusters(summary, default)
-        + _noise(summary)
-        + _default(summary)
-        + _sampling(summary)
-        + _raw(summary)
-        + _hands(summary)
-    )
+    body = []
+    for number, (title, section) in enumerate(_SECTIONS, 1):
+        body += [f"## {number}. {title}", "", *section(summary)]
     return "\n".join(head + body)
