@@ -178,7 +178,10 @@ def evaluate_matrix(
     )
 
 
-def _cached_symmetry(cache: DescriptorCache | None, grasp, backend, sampler):
+def symmetry_cache(cache: DescriptorCache | None, grasp, backend, sampler):
+    """The ``cached(name, compute)`` of `configuration_values` beside a grasp's cached
+    descriptor: the values through each symmetry kept as ``.npy`` files (None without a
+    cache)."""
     if cache is None:
         return None
     base = cache.path(grasp, backend, sampler)
@@ -259,7 +262,7 @@ def evaluate(
                 if cache is not None
                 else compute_descriptor(g, sampler, backend=instance, progress=False)
             )
-            cached = _cached_symmetry(cache, g, instance, sampler)
+            cached = symmetry_cache(cache, g, instance, sampler)
             stacks.append(configuration_values(g, d, sampler, instance, named_symmetries, cached))
         times = sampler.times
     elif not any(is_grasp):

@@ -27,7 +27,7 @@ from exactgrasp.backends.registry import shared_backend
 from exactgrasp.errors import ExactGraspError
 from exactgrasp.evaluation.baselines import baseline_matrix
 from exactgrasp.evaluation.distances import configuration_values, distance_matrix
-from exactgrasp.evaluation.evaluate import evaluate_matrix
+from exactgrasp.evaluation.evaluate import evaluate_matrix, symmetry_cache
 from exactgrasp.evaluation.pairs import LabelledPairs, pairs_from_groups
 from exactgrasp.evaluation.roc import bootstrap_auc
 from exactgrasp.evaluation.symmetry import as_symmetries
@@ -126,16 +126,7 @@ class Study:
         for g in grasps:
             d = self.cache.descriptor(g, sampler, backend)
             seconds += float(d.metadata.get("seconds", 0.0))
-            base = self.cache.path(g, instance, sampler)
-
-            def cached(name, compute, base=base):
-                file = base.with_name(f"{base.stem}.{name}.npy")
-                if file.exists():
-                    return np.load(file)
-                values = compute()
-                np.save(file, values)
-                return values
-
+            cached = symmetry_cache(self.cache, g, instance, sampler)
             out.append(configuration_values(g, d, sampler, instance, symmetries, cached))
         return out, seconds
 
