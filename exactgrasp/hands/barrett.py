@@ -27,6 +27,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from exactgrasp.cache import LRUCache
+from exactgrasp.hands.mjcf import primitive_hand_mjcf
 
 if TYPE_CHECKING:
     from exactgrasp.hands.hand import Hand
@@ -40,57 +41,45 @@ DISTAL_RATIO = 12.0 / 35.0
 #: The built-in hand's palm frame, read by `exactgrasp.hands.loading.load_model` from the site.
 BARRETT_PALM = {"site": "palm_face", "normal": "+z", "up": "+y", "depth": 0.085}
 
-_FINGER_12 = """
-      <body name="finger_{i}_prox" pos="{x} 0 0.0754">
-        <joint name="finger_{i}_prox_joint" axis="0 0 {s}" range="0 3.14159265"/>
-        <geom name="finger_{i}_prox" type="box" pos="0 -0.024 -0.004" size="0.012 0.036 0.016"/>
-        <body name="finger_{i}_med" pos="0 -0.05 0">
-          <joint name="finger_{i}_med_joint" axis="-1 0 0" range="0 2.44"/>
-          <geom name="finger_{i}_med" type="box" pos="0 -0.0335 0.001"
-                size="0.0105 0.046 0.0135"/>
-          <body name="finger_{i}_dist" pos="0 -0.06994 0.003">
-            <joint name="finger_{i}_dist_joint" axis="-1 0 0" range="0 0.837"/>
-            <geom name="finger_{i}_dist" type="capsule" fromto="0 0 0 0 -0.0394 0.0308"
-                  size="0.009"/>
-          </body>
-        </body>
-      </body>"""
+# The medial and distal links of a finger: ``a`` the sign of the joints' x axis, ``y`` that
+# of the direction the finger points in (fingers 1 and 2 point to -y, finger 3 to +y).
+_MED_DIST = """
+<body name="finger_{i}_med" pos="{pos}">
+  <joint name="finger_{i}_med_joint" axis="{a}1 0 0" range="0 2.44"/>
+  <geom name="finger_{i}_med" type="box" pos="0 {y}0.0335 0.001" size="0.0105 0.046 0.0135"/>
+  <body name="finger_{i}_dist" pos="0 {y}0.06994 0.003">
+    <joint name="finger_{i}_dist_joint" axis="{a}1 0 0" range="0 0.837"/>
+    <geom name="finger_{i}_dist" type="capsule" fromto="0 0 0 0 {y}0.0394 0.0308" size="0.009"/>
+  </body>
+</body>"""
 
-BARRETT_MJCF = f"""<mujoco model="barrett_builtin">
-  <compiler angle="radian" autolimits="true"/>
-  <worldbody>
-    <body name="palm">
-      <geom name="palm" type="box" pos="0 0 0.04" size="0.045 0.045 0.04"/>
-      <site name="palm_face" pos="0 0 0.08"/>
-{_FINGER_12.format(i=1, x=-0.025, s=-1)}
-{_FINGER_12.format(i=2, x=0.025, s=1)}
-      <body name="finger_3_med" pos="0 0.05 0.0754">
-        <joint name="finger_3_med_joint" axis="1 0 0" range="0 2.44"/>
-        <geom name="finger_3_med" type="box" pos="0 0.0335 0.001" size="0.0105 0.046 0.0135"/>
-        <body name="finger_3_dist" pos="0 0.06994 0.003">
-          <joint name="finger_3_dist_joint" axis="1 0 0" range="0 0.837"/>
-          <geom name="finger_3_dist" type="capsule" fromto="0 0 0 0 0.0394 0.0308"
-                size="0.009"/>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-  <equality>
-    <joint joint1="finger_2_prox_joint" joint2="finger_1_prox_joint" polycoef="0 1 0 0 0"/>
-  </equality>
-</mujoco>
-"""
+# Fingers 1 and 2: a knuckle link turning about z (the spread) that holds the others.
+_FINGER_12 = """
+<body name="finger_{i}_prox" pos="{x} 0 0.0754">
+  <joint name="finger_{i}_prox_joint" axis="0 0 {s}" range="0 3.14159265"/>
+  <geom name="finger_{i}_prox" type="box" pos="0 -0.024 -0.004" size="0.012 0.036 0.016"/>
+  {med_dist}
+</body>"""
+
+
+def _finger_12(i: int, x: str, s: str) -> str:
+    return _FINGER_12.format(
+        i=i, x=x, s=s, med_dist=_MED_DIST.format(i=i, pos="0 -0.05 0", a="-", y="-")
+    )
+
+
+BARRETT_MJCF = primitive_hand_mjcf(
+    "barrett_builtin",
+    palm=("0 0 0.04", "0.045 0.045 0.04"),
+    face="0 0 0.08",
+    fingers=_finger_12(1, "-0.025", "-1")
+    + _finger_12(2, "0.025", "1")
+    + _MED_DIST.format(i=3, pos="0 0.05 0.0754", a="", y=""),
+    mirrored=("finger_2_prox_joint", "finger_1_prox_joint"),
+)
 
 
 #: Compiled models by (distal_coupling, tessellation).
-def _load_model():
-    # MuJoCo and the mesh code load with the first hand, not with the MJCF text (which
-    # ``exactgrasp inspect --help`` lists by name).
-    from exactgrasp.hands.loading import load_model
-
-    return load_model
-
-
 _MODELS = LRUCache(8)
 
 
@@ -116,9 +105,13 @@ def barrett_model(distal_coupling: bool = False, tessellation: int = 32) -> Kine
         if distal_coupling
         else None
     )
+    # MuJoCo and the mesh code load with the first hand, not with the MJCF text (which
+    # ``exactgrasp inspect --help`` lists by name).
+    from exactgrasp.hands.loading import load_model
+
     return _MODELS.get(
         (distal_coupling, tessellation),
-        lambda: _load_model()(
+        lambda: load_model(
             "barrett_builtin.xml",
             xml=BARRETT_MJCF,
             palm=BARRETT_PALM,

@@ -21,6 +21,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from exactgrasp.cache import LRUCache
+from exactgrasp.hands.mjcf import primitive_hand_mjcf
 
 if TYPE_CHECKING:
     from exactgrasp.hands.hand import Hand
@@ -48,32 +49,16 @@ _FINGER = """
         <geom name="finger_{i}" type="box" pos="0 {y} 0.025" size="0.01 0.006 0.025"/>
       </body>"""
 
-GRIPPER_MJCF = f"""<mujoco model="parallel_gripper">
-  <compiler angle="radian" autolimits="true"/>
-  <worldbody>
-    <body name="palm">
-      <geom name="palm" type="box" pos="0 0 -0.02" size="0.03 0.1 0.02"/>
-      <site name="palm_face" pos="0 0 0"/>
-{_FINGER.format(i=1, s=1, y=0.046)}
-{_FINGER.format(i=2, s=-1, y=-0.046)}
-    </body>
-  </worldbody>
-  <equality>
-    <joint joint1="finger_2_joint" joint2="finger_1_joint" polycoef="0 1 0 0 0"/>
-  </equality>
-</mujoco>
-"""
+GRIPPER_MJCF = primitive_hand_mjcf(
+    "parallel_gripper",
+    palm=("0 0 -0.02", "0.03 0.1 0.02"),
+    face="0 0 0",
+    fingers=_FINGER.format(i=1, s=1, y=0.046) + _FINGER.format(i=2, s=-1, y=-0.046),
+    mirrored=("finger_2_joint", "finger_1_joint"),
+)
 
 
 #: The compiled model (boxes only, so there is nothing to tessellate).
-def _load_model():
-    # MuJoCo and the mesh code load with the first hand, not with the MJCF text (which
-    # ``exactgrasp inspect --help`` lists by name).
-    from exactgrasp.hands.loading import load_model
-
-    return load_model
-
-
 _MODELS = LRUCache(1)
 
 
@@ -86,9 +71,13 @@ def parallel_gripper_model() -> KinematicModel:
         One user-facing joint, ``finger_1_joint`` (0 .. 0.04 m, 0 = shut);
         ``finger_2_joint`` follows it. Links ``palm``, ``finger_1``, ``finger_2``.
     """
+    # MuJoCo and the mesh code load with the first hand, not with the MJCF text (which
+    # ``exactgrasp inspect --help`` lists by name).
+    from exactgrasp.hands.loading import load_model
+
     return _MODELS.get(
         "gripper",
-        lambda: _load_model()("parallel_gripper.xml", xml=GRIPPER_MJCF, palm=GRIPPER_PALM),
+        lambda: load_model("parallel_gripper.xml", xml=GRIPPER_MJCF, palm=GRIPPER_PALM),
     )
 
 
