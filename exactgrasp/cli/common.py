@@ -15,7 +15,7 @@ import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.errors import ExactGraspError, Fix, SamplerError
@@ -33,6 +33,8 @@ __all__ = [
     "ON_LIMIT",
     "FlagTerms",
     "add_backend",
+    "add_command",
+    "add_grasp_inputs",
     "add_grasp_options",
     "add_on_limit",
     "add_progress",
@@ -43,6 +45,7 @@ __all__ = [
     "grasp_from_args",
     "in_flag_terms",
     "read_grasp",
+    "sampler_and_grasp",
     "sampler_from_args",
     "timing",
 ]
@@ -134,6 +137,38 @@ def described(text: str, example: str) -> str:
         f"{text} Example: {example} . Every flag, with examples: docs/cli.md; from your own "
         "hand and objects to a dataset's descriptors: docs/tutorial.md."
     )
+
+
+def add_command(
+    subparsers: Any,
+    name: str,
+    handler: Callable[[argparse.Namespace], int],
+    *,
+    help: str,
+    text: str,
+    example: str,
+) -> argparse.ArgumentParser:
+    """Add a sub-command to the ``exactgrasp`` command's subparsers.
+
+    Parameters
+    ----------
+    subparsers : argparse subparsers action
+    name : str
+    handler : callable
+        Runs the command on the parsed arguments and returns its exit status.
+    help : str
+        The command's line in ``exactgrasp --help``.
+    text, example : str
+        Its ``--help`` description (`described`).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The command's parser, for its own options.
+    """
+    parser = subparsers.add_parser(name, help=help, description=described(text, example))
+    parser.set_defaults(func=handler)
+    return parser
 
 
 def timing(metadata: dict) -> str:
@@ -274,6 +309,13 @@ def add_grasp_options(parser: argparse.ArgumentParser) -> None:
     add_on_limit(parser)
 
 
+def add_grasp_inputs(parser: argparse.ArgumentParser) -> None:
+    """The options of a command that samples paths around grasp files: ``--sampler`` and
+    ``--steps`` (`add_sampler`), then the grasp-file overrides (`add_grasp_options`)."""
+    add_sampler(parser)
+    add_grasp_options(parser)
+
+
 def read_grasp(
     path: str | os.PathLike,
     units: str | None = None,
@@ -324,3 +366,18 @@ def grasp_from_args(args: argparse.Namespace, path: str | os.PathLike | None = N
         repair=getattr(args, "repair", None),
         on_limit=getattr(args, "on_limit", None),
     )
+
+
+def sampler_and_grasp(
+    args: argparse.Namespace, check: Callable[[PathSampler], object] | None = None
+) -> tuple[PathSampler, Grasp]:
+    """The sampler of ``--sampler`` and ``--steps``, and the grasp file ``args.grasp`` read
+    with the options of `add_grasp_options`.
+
+    The sampler comes first and ``check(sampler)`` (the command's flags that depend on it)
+    next, so that a wrong flag is refused, naming the flag, before the grasp's meshes load.
+    """
+    sampler = sampler_from_args(args)
+    if check is not None:
+        check(sampler)
+    return sampler, grasp_from_args(args)

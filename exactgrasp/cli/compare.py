@@ -14,10 +14,9 @@ from typing import Any
 
 from exactgrasp.backends.defaults import COMPARED_BACKENDS
 from exactgrasp.cli.common import (
-    add_grasp_options,
+    add_command,
+    add_grasp_inputs,
     add_progress,
-    add_sampler,
-    described,
     grasp_from_args,
     sampler_from_args,
 )
@@ -96,15 +95,17 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``compare`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser(
+    parser = add_command(
+        subparsers,
         "compare",
+        cmd_compare,
         help="distances between descriptor files, or backends pose by pose on a grasp file",
-        description=described(
+        text=(
             "With two or more .npz descriptor files: their l2 and l2_diff distance "
             "matrices. With one grasp JSON file: every backend of --backends on the same poses, "
-            "compared pose by pose with the last one (the reference).",
-            "exactgrasp compare box.json --backends voxel,exact -o poses.csv",
+            "compared pose by pose with the last one (the reference)."
         ),
+        example="exactgrasp compare box.json --backends voxel,exact -o poses.csv",
     )
     parser.add_argument("inputs", nargs="+", metavar="INPUT", help="a.npz b.npz ... or GRASP.json")
     parser.add_argument(
@@ -117,8 +118,6 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "-o", "--output", default=None, help="write the per-pose table (.csv or .parquet)"
     )
     add_param(parser)
-    add_sampler(parser)
-    add_grasp_options(parser)
+    add_grasp_inputs(parser)
     add_progress(parser)
-    parser.set_defaults(func=cmd_compare)
     return parser

@@ -10,10 +10,9 @@ from typing import Any
 
 from exactgrasp.cli.common import (
     add_backend,
-    add_grasp_options,
+    add_command,
+    add_grasp_inputs,
     add_progress,
-    add_sampler,
-    described,
     grasp_from_args,
     sampler_from_args,
     timing,
@@ -43,21 +42,21 @@ def cmd_descriptor(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``descriptor`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser(
+    parser = add_command(
+        subparsers,
         "descriptor",
+        cmd_descriptor,
         help="the descriptor of one grasp file",
-        description=described(
+        text=(
             "Compute the descriptor of GRASP (a grasp JSON file) with one backend and "
-            "write it as a .npz file (values: paths x steps, intersection volume / hand volume).",
-            "exactgrasp descriptor box.json --backend exact -o box.npz",
+            "write it as a .npz file (values: paths x steps, intersection volume / hand volume)."
         ),
+        example="exactgrasp descriptor box.json --backend exact -o box.npz",
     )
     parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file")
     parser.add_argument("-o", "--output", required=True, help="output .npz file")
     add_backend(parser)
     add_param(parser)
-    add_sampler(parser)
-    add_grasp_options(parser)
+    add_grasp_inputs(parser)
     add_progress(parser)
-    parser.set_defaults(func=cmd_descriptor)
     return parser

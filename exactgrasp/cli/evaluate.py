@@ -14,9 +14,8 @@ from typing import TYPE_CHECKING, Any
 
 from exactgrasp.cli.common import (
     add_backend,
-    add_grasp_options,
-    add_sampler,
-    described,
+    add_command,
+    add_grasp_inputs,
     read_grasp,
     sampler_from_args,
 )
@@ -85,16 +84,18 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``evaluate`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser(
+    parser = add_command(
+        subparsers,
         "evaluate",
+        cmd_evaluate,
         help="AUC of descriptor distances on labelled pairs of grasps",
-        description=described(
+        text=(
             "Read PAIRS (a CSV with columns a,b,label and optionally group; a and b are grasp "
             "files relative to the CSV, or ids of --manifest; label is same/different or a "
             "grade), compute the grasps' descriptors and write the AUC of each distance and "
-            "baseline with a bootstrap interval, the ROC curves and a per-group breakdown.",
-            "exactgrasp evaluate pairs.csv -o evaluation --backend voxel",
+            "baseline with a bootstrap interval, the ROC curves and a per-group breakdown."
         ),
+        example="exactgrasp evaluate pairs.csv -o evaluation --backend voxel",
     )
     parser.add_argument("pairs", metavar="PAIRS", help="CSV of labelled pairs")
     parser.add_argument("-o", "--output", required=True, help="output folder")
@@ -128,7 +129,5 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     add_backend(parser)
     add_param(parser)
-    add_sampler(parser)
-    add_grasp_options(parser)
-    parser.set_defaults(func=cmd_evaluate)
+    add_grasp_inputs(parser)
     return parser

@@ -8,13 +8,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from exactgrasp.cli.common import (
-    add_grasp_options,
-    add_sampler,
-    described,
-    grasp_from_args,
-    sampler_from_args,
-)
+from exactgrasp.cli.common import add_command, add_grasp_inputs, sampler_and_grasp
 
 __all__ = ["add_parser", "cmd_show"]
 
@@ -24,10 +18,10 @@ def cmd_show(args: argparse.Namespace) -> int:
     from exactgrasp.view.scene import choose_paths
     from exactgrasp.view.write import show
 
-    sampler = sampler_from_args(args)
-    # Checked here first so that the message names the flag, not the Python argument.
-    choose_paths(sampler, args.paths, name="--paths")
-    grasp = grasp_from_args(args)
+    # --paths checked here first so that the message names the flag, not the Python argument.
+    sampler, grasp = sampler_and_grasp(
+        args, check=lambda sampler: choose_paths(sampler, args.paths, name="--paths")
+    )
     shown = show(
         grasp, sampler, n_paths=args.paths, path=args.output, png=args.png, open_browser=args.open
     )
@@ -41,17 +35,17 @@ def cmd_show(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``show`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser(
+    parser = add_command(
+        subparsers,
         "show",
+        cmd_show,
         help="an interactive HTML page (and a PNG) of a grasp and its sampled paths",
-        description=described(
-            (
-                "Draw the hand links, the object at the grasp pose, the canonical frame's axes "
-                "and a spread of the sampler's paths (the object's centre, coloured by time) "
-                "into one self-contained HTML page that needs no network to open."
-            ),
-            "exactgrasp show box.json -o box.html --png box.png",
+        text=(
+            "Draw the hand links, the object at the grasp pose, the canonical frame's axes "
+            "and a spread of the sampler's paths (the object's centre, coloured by time) "
+            "into one self-contained HTML page that needs no network to open."
         ),
+        example="exactgrasp show box.json -o box.html --png box.png",
     )
     parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file")
     parser.add_argument(
@@ -65,8 +59,6 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="N",
         help="how many sampled paths to draw, spread evenly (default 24)",
     )
-    add_sampler(parser)
-    add_grasp_options(parser)
+    add_grasp_inputs(parser)
     parser.add_argument("--open", action="store_true", help="open the page in a web browser")
-    parser.set_defaults(func=cmd_show)
     return parser
