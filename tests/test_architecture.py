@@ -27,6 +27,7 @@ LAYERS = {
     "datapath": 0,
     "compiling": 0,
     "lazy": 0,
+    "given": 0,
     "geometry": 1,
     "progress": 1,
     "hands": 2,

@@ -42,6 +42,7 @@ from exactgrasp.batch.worker import default_workers, open_pool
 from exactgrasp.diagnostics import ignores_third_party_warnings
 from exactgrasp.errors import BatchError, Fix
 from exactgrasp.geometry.intake import UNITS
+from exactgrasp.given import given
 from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.progress import progress_bar
@@ -235,8 +236,7 @@ def run_batch(
         raise BatchError(f"units must be one of {sorted(UNITS)}, got {units!r}.")
     if repair not in (None, True, False):
         raise BatchError(f"repair must be True, False or None, got {repair!r}.")
-    given = (("units", units), ("repair", repair), ("on_limit", on_limit))
-    overrides = {key: value for key, value in given if value is not None}
+    overrides = given(units=units, repair=repair, on_limit=on_limit)
     sampler = as_sampler(sampler)
     engine = get_backend(backend, **(backend_params or {}))
     spec = engine if isinstance(backend, Backend) else (backend, dict(backend_params or {}))

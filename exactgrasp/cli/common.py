@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.errors import ExactGraspError, Fix, SamplerError
 from exactgrasp.geometry.intake import UNITS
+from exactgrasp.given import given
 from exactgrasp.paths.presets import DEFAULT_PRESET, SAMPLER_PARAMETERS, as_sampler
 from exactgrasp.paths.sampler import PRESETS, PathSampler
 
@@ -347,10 +348,8 @@ def read_grasp(
     """
     from exactgrasp.grasp import Grasp
 
-    given = (("units", units), ("repair", repair), ("on_limit", on_limit))
-    overrides = {key: value for key, value in given if value is not None}
     try:
-        return Grasp.from_file(path, **overrides)
+        return Grasp.from_file(path, **given(units=units, repair=repair, on_limit=on_limit))
     except ExactGraspError as exc:
         if not exc.fixes:
             raise

@@ -20,6 +20,7 @@ import trimesh
 
 from exactgrasp.errors import Fix, FrameError, JointError, MeshError
 from exactgrasp.geometry.solid import Solid
+from exactgrasp.given import given
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.loading import jsonable, load_model_cached
 from exactgrasp.hands.noise import joint_noise
@@ -242,16 +243,15 @@ class Hand:
         -------
         Hand
         """
-        given = {
-            "root_body": root_body,
-            "geometry": geometry,
-            "tessellation": tessellation,
-            "palm": palm,
-            "couplings": couplings,
-            "package_dirs": package_dirs,
-            "repair": repair,
-        }
-        options = {k: v for k, v in given.items() if v is not None}
+        options = given(
+            root_body=root_body,
+            geometry=geometry,
+            tessellation=tessellation,
+            palm=palm,
+            couplings=couplings,
+            package_dirs=package_dirs,
+            repair=repair,
+        )
         model = load_model_cached(Path(path), options)
         source = {"type": "model", "path": str(Path(path)), "options": jsonable(options)}
         return cls(model, joints=joints, frame=frame, on_limit=on_limit, source=source)

@@ -13,6 +13,7 @@ import sys
 
 from exactgrasp.datapath import ENV_VAR, data_dir
 from exactgrasp.errors import DataError
+from exactgrasp.given import given
 from exactgrasp.report.config import ValidationConfig
 
 __all__ = ["DESCRIPTION", "HELP", "add_arguments", "overrides", "run_from_args"]
@@ -81,10 +82,8 @@ def overrides(args: argparse.Namespace) -> dict:
     out: dict = {}
     if args.n_cereal is not None:
         out["n_cereal"] = None if args.n_cereal < 0 else args.n_cereal
-    for name in ("contact_per_object", "noise_copies", "joint_draws", "exact_joint_draws"):
-        value = getattr(args, name)
-        if value is not None:
-            out[name] = value
+    names = ("contact_per_object", "noise_copies", "joint_draws", "exact_joint_draws")
+    out.update(given(**{name: getattr(args, name) for name in names}))
     if args.exact_noise_samplers is not None:
         out["exact_noise_samplers"] = tuple(p for p in args.exact_noise_samplers.split(",") if p)
     return out
