@@ -17,10 +17,10 @@ from exactgrasp.batch.manifest import DEFAULT_PART_SIZE
 from exactgrasp.cli.common import (
     FlagTerms,
     add_backend,
+    add_command,
     add_grasp_options,
     add_progress,
     add_sampler,
-    described,
     flag,
     in_flag_terms,
     sampler_from_args,
@@ -29,6 +29,19 @@ from exactgrasp.cli.params import add_param, build_backend, split_params
 from exactgrasp.errors import BatchError, Fix
 
 __all__ = ["BATCH_TERMS", "add_parser", "cmd_batch"]
+
+
+#: The command's line in ``exactgrasp --help``.
+HELP = "descriptors of every grasp in a manifest, resumable, on local cores or a cluster"
+#: Its ``--help`` description, and the example that follows it.
+DESCRIPTION = (
+    "Compute the descriptor of every grasp listed in MANIFEST (.jsonl or .parquet; "
+    'rows {"id": ..., "grasp": "path/to/grasp.json" or an inline grasp}) into '
+    "--out. Run the same command again after a kill to finish what is left. Exit "
+    "status 1 when any row failed (see OUT/errors.jsonl), 2 on a bad manifest or "
+    "arguments."
+)
+EXAMPLE = "exactgrasp batch manifest.jsonl --out run --workers 2"
 
 
 def _workers(fix: Fix) -> str:
@@ -81,20 +94,7 @@ def _run(args: argparse.Namespace, sampler, params: dict):
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``batch`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser(
-        "batch",
-        help="descriptors of every grasp in a manifest, resumable, on local cores or a cluster",
-        description=described(
-            (
-                "Compute the descriptor of every grasp listed in MANIFEST (.jsonl or .parquet; "
-                'rows {"id": ..., "grasp": "path/to/grasp.json" or an inline grasp}) into '
-                "--out. Run the same command again after a kill to finish what is left. Exit "
-                "status 1 when any row failed (see OUT/errors.jsonl), 2 on a bad manifest or "
-                "arguments."
-            ),
-            "exactgrasp batch manifest.jsonl --out run --workers 2",
-        ),
-    )
+    parser = add_command(subparsers, "batch", cmd_batch, HELP, DESCRIPTION, EXAMPLE)
     parser.add_argument("manifest", metavar="MANIFEST", help="manifest file (.jsonl or .parquet)")
     parser.add_argument("--out", required=True, help="output folder (created; resumed if there)")
     add_backend(parser)
@@ -118,5 +118,4 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     add_grasp_options(parser)
     add_progress(parser)
-    parser.set_defaults(func=cmd_batch)
     return parser

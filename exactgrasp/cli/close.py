@@ -14,8 +14,9 @@ from typing import Any
 
 from exactgrasp.cli.common import (
     FlagTerms,
+    add_command,
+    add_grasp_file,
     add_grasp_options,
-    described,
     flag,
     grasp_from_args,
     in_flag_terms,
@@ -37,6 +38,18 @@ CLOSING_TERMS = FlagTerms(
         "step": flag("--step"),
     }
 )
+
+
+#: The command's line in ``exactgrasp --help``.
+HELP = "close the fingers of a grasp onto its object; write the closed grasp file"
+#: Its ``--help`` description, and the example that follows it.
+DESCRIPTION = (
+    "Open the closing joints of GRASP's hand, move the object out along the "
+    "palm normal if the open hand still penetrates it, then close each finger until it "
+    "touches the object (within --tolerance) or reaches its joint limits. Writes the "
+    "closed grasp to --output and prints each closing joint's value and contact."
+)
+EXAMPLE = "exactgrasp close box.json -o box-closed.json"
 
 
 def parse_joints(text: str | None) -> list[str] | None:
@@ -139,19 +152,10 @@ def cmd_close(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``close`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser(
-        "close",
-        help="close the fingers of a grasp onto its object; write the closed grasp file",
-        description=described(
-            "Open the closing joints of GRASP's hand, move the object out along the "
-            "palm normal if the open hand still penetrates it, then close each finger until it "
-            "touches the object (within --tolerance) or reaches its joint limits. Writes the "
-            "closed grasp to --output and prints each closing joint's value and contact.",
-            "exactgrasp close box.json -o box-closed.json",
-        ),
+    parser = add_command(subparsers, "close", cmd_close, HELP, DESCRIPTION, EXAMPLE)
+    add_grasp_file(
+        parser, "closed grasp JSON file to write", grasp="grasp JSON file (an articulated hand)"
     )
-    parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file (an articulated hand)")
-    parser.add_argument("-o", "--output", required=True, help="closed grasp JSON file to write")
     parser.add_argument(
         "--joints",
         default=None,
@@ -197,5 +201,4 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         f"{'move' if DEFAULTS['backoff'] else 'refuse'})",
     )
     add_grasp_options(parser)
-    parser.set_defaults(func=cmd_close)
     return parser

@@ -35,6 +35,7 @@ __all__ = [
     "FlagTerms",
     "add_backend",
     "add_command",
+    "add_grasp_file",
     "add_grasp_inputs",
     "add_grasp_options",
     "add_on_limit",
@@ -144,8 +145,7 @@ def add_command(
     subparsers: Any,
     name: str,
     handler: Callable[[argparse.Namespace], int],
-    *,
-    help: str,
+    summary: str,
     text: str,
     example: str,
 ) -> argparse.ArgumentParser:
@@ -157,7 +157,7 @@ def add_command(
     name : str
     handler : callable
         Runs the command on the parsed arguments and returns its exit status.
-    help : str
+    summary : str
         The command's line in ``exactgrasp --help``.
     text, example : str
         Its ``--help`` description (`described`).
@@ -167,7 +167,7 @@ def add_command(
     argparse.ArgumentParser
         The command's parser, for its own options.
     """
-    parser = subparsers.add_parser(name, help=help, description=described(text, example))
+    parser = subparsers.add_parser(name, help=summary, description=described(text, example))
     parser.set_defaults(func=handler)
     return parser
 
@@ -308,6 +308,15 @@ def add_grasp_options(parser: argparse.ArgumentParser) -> None:
         "grasp file's object_repair (default: the file's, else no)",
     )
     add_on_limit(parser)
+
+
+def add_grasp_file(
+    parser: argparse.ArgumentParser, output: str, grasp: str = "grasp JSON file"
+) -> None:
+    """The ``GRASP`` argument (described by ``grasp``) and the required ``-o/--output``
+    (described by ``output``) of a command that writes what it makes of one grasp file."""
+    parser.add_argument("grasp", metavar="GRASP", help=grasp)
+    parser.add_argument("-o", "--output", required=True, help=output)
 
 
 def add_grasp_inputs(parser: argparse.ArgumentParser) -> None:

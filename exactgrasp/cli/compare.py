@@ -26,6 +26,17 @@ from exactgrasp.errors import ExactGraspError
 __all__ = ["add_parser", "cmd_compare"]
 
 
+#: The command's line in ``exactgrasp --help``.
+HELP = "distances between descriptor files, or backends pose by pose on a grasp file"
+#: Its ``--help`` description, and the example that follows it.
+DESCRIPTION = (
+    "With two or more .npz descriptor files: their l2 and l2_diff distance "
+    "matrices. With one grasp JSON file: every backend of --backends on the same poses, "
+    "compared pose by pose with the last one (the reference)."
+)
+EXAMPLE = "exactgrasp compare box.json --backends voxel,exact -o poses.csv"
+
+
 def _distances(inputs: list[Path]) -> int:
     from exactgrasp.descriptor import Descriptor, pairwise_distances
 
@@ -95,18 +106,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``compare`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = add_command(
-        subparsers,
-        "compare",
-        cmd_compare,
-        help="distances between descriptor files, or backends pose by pose on a grasp file",
-        text=(
-            "With two or more .npz descriptor files: their l2 and l2_diff distance "
-            "matrices. With one grasp JSON file: every backend of --backends on the same poses, "
-            "compared pose by pose with the last one (the reference)."
-        ),
-        example="exactgrasp compare box.json --backends voxel,exact -o poses.csv",
-    )
+    parser = add_command(subparsers, "compare", cmd_compare, HELP, DESCRIPTION, EXAMPLE)
     parser.add_argument("inputs", nargs="+", metavar="INPUT", help="a.npz b.npz ... or GRASP.json")
     parser.add_argument(
         "--backends",

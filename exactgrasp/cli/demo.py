@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from exactgrasp.cli.common import add_progress, add_sampler, described, sampler_from_args
+from exactgrasp.cli.common import add_command, add_progress, add_sampler, sampler_from_args
 from exactgrasp.cli.params import add_param, backend_names, build_backend, split_params
 from exactgrasp.paths.presets import as_sampler
 
@@ -21,6 +21,18 @@ __all__ = ["QUICK_SAMPLER", "add_parser", "cmd_demo", "demo_grasps", "run_demo"]
 
 #: The sampler of ``--quick``: 34 paths (6 translations, 4 rotations, 24 both) x 5 steps.
 QUICK_SAMPLER = {"n_translations": 6, "n_axes": 2, "n_amounts": 2, "n_steps": 5}
+
+
+#: The command's line in ``exactgrasp --help``.
+HELP = "built-in grasps on every available backend"
+#: Its ``--help`` description, and the example that follows it.
+DESCRIPTION = (
+    "Close the built-in Barrett hand onto three built-in objects and the "
+    "built-in parallel gripper onto a box, compute each "
+    "grasp's descriptor with every available backend, print a table of times and values "
+    "and write a plot, a summary and the descriptors into --out."
+)
+EXAMPLE = "exactgrasp demo --quick --out demo-output"
 
 
 def _pose(rotation_deg: tuple[float, float, float], translation: tuple[float, float, float]):
@@ -167,17 +179,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``demo`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser(
-        "demo",
-        help="built-in grasps on every available backend",
-        description=described(
-            "Close the built-in Barrett hand onto three built-in objects and the "
-            "built-in parallel gripper onto a box, compute each "
-            "grasp's descriptor with every available backend, print a table of times and values "
-            "and write a plot, a summary and the descriptors into --out.",
-            "exactgrasp demo --quick --out demo-output",
-        ),
-    )
+    parser = add_command(subparsers, "demo", cmd_demo, HELP, DESCRIPTION, EXAMPLE)
     quick = as_sampler(QUICK_SAMPLER)
     parser.add_argument("--out", default="demo-output", help="folder for the plot and table")
     parser.add_argument(
@@ -189,5 +191,4 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     add_param(parser)
     add_sampler(parser)
     add_progress(parser)
-    parser.set_defaults(func=cmd_demo)
     return parser

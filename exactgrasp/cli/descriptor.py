@@ -11,6 +11,7 @@ from typing import Any
 from exactgrasp.cli.common import (
     add_backend,
     add_command,
+    add_grasp_file,
     add_grasp_inputs,
     add_progress,
     grasp_from_args,
@@ -20,6 +21,16 @@ from exactgrasp.cli.common import (
 from exactgrasp.cli.params import add_param, build_backend, split_params
 
 __all__ = ["add_parser", "cmd_descriptor"]
+
+
+#: The command's line in ``exactgrasp --help``.
+HELP = "the descriptor of one grasp file"
+#: Its ``--help`` description, and the example that follows it.
+DESCRIPTION = (
+    "Compute the descriptor of GRASP (a grasp JSON file) with one backend and "
+    "write it as a .npz file (values: paths x steps, intersection volume / hand volume)."
+)
+EXAMPLE = "exactgrasp descriptor box.json --backend exact -o box.npz"
 
 
 def cmd_descriptor(args: argparse.Namespace) -> int:
@@ -42,19 +53,8 @@ def cmd_descriptor(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``descriptor`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = add_command(
-        subparsers,
-        "descriptor",
-        cmd_descriptor,
-        help="the descriptor of one grasp file",
-        text=(
-            "Compute the descriptor of GRASP (a grasp JSON file) with one backend and "
-            "write it as a .npz file (values: paths x steps, intersection volume / hand volume)."
-        ),
-        example="exactgrasp descriptor box.json --backend exact -o box.npz",
-    )
-    parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file")
-    parser.add_argument("-o", "--output", required=True, help="output .npz file")
+    parser = add_command(subparsers, "descriptor", cmd_descriptor, HELP, DESCRIPTION, EXAMPLE)
+    add_grasp_file(parser, "output .npz file")
     add_backend(parser)
     add_param(parser)
     add_grasp_inputs(parser)

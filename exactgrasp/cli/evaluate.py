@@ -34,6 +34,18 @@ if TYPE_CHECKING:
 __all__ = ["add_parser", "cmd_evaluate"]
 
 
+#: The command's line in ``exactgrasp --help``.
+HELP = "AUC of descriptor distances on labelled pairs of grasps"
+#: Its ``--help`` description, and the example that follows it.
+DESCRIPTION = (
+    "Read PAIRS (a CSV with columns a,b,label and optionally group; a and b are grasp "
+    "files relative to the CSV, or ids of --manifest; label is same/different or a "
+    "grade), compute the grasps' descriptors and write the AUC of each distance and "
+    "baseline with a bootstrap interval, the ROC curves and a per-group breakdown."
+)
+EXAMPLE = "exactgrasp evaluate pairs.csv -o evaluation --backend voxel"
+
+
 def _grasps(args: argparse.Namespace, sources: list) -> list[Grasp]:
     from exactgrasp.grasp import Grasp
 
@@ -84,19 +96,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``evaluate`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = add_command(
-        subparsers,
-        "evaluate",
-        cmd_evaluate,
-        help="AUC of descriptor distances on labelled pairs of grasps",
-        text=(
-            "Read PAIRS (a CSV with columns a,b,label and optionally group; a and b are grasp "
-            "files relative to the CSV, or ids of --manifest; label is same/different or a "
-            "grade), compute the grasps' descriptors and write the AUC of each distance and "
-            "baseline with a bootstrap interval, the ROC curves and a per-group breakdown."
-        ),
-        example="exactgrasp evaluate pairs.csv -o evaluation --backend voxel",
-    )
+    parser = add_command(subparsers, "evaluate", cmd_evaluate, HELP, DESCRIPTION, EXAMPLE)
     parser.add_argument("pairs", metavar="PAIRS", help="CSV of labelled pairs")
     parser.add_argument("-o", "--output", required=True, help="output folder")
     parser.add_argument("--manifest", help="batch manifest (.jsonl) whose ids PAIRS names")

@@ -15,11 +15,24 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-from exactgrasp.cli.common import FlagTerms, described, flag, in_flag_terms
+from exactgrasp.cli.common import FlagTerms, add_command, flag, in_flag_terms
 from exactgrasp.errors import ExactGraspError, Fix, ModelError
 from exactgrasp.hands.builtins import BUILTIN_HANDS, BUILTIN_MJCF
 
 __all__ = ["add_parser", "cmd_inspect", "inspect_lines", "package_dirs_from_args"]
+
+
+#: The command's line in ``exactgrasp --help``.
+HELP = "the body tree of a URDF/MJCF hand model: joints, limits, geoms, sites"
+#: Its ``--help`` description, and the example that follows it.
+DESCRIPTION = (
+    "Print the bodies of a URDF or MJCF model (or of a built-in hand: "
+    f"{', '.join(sorted(BUILTIN_HANDS))}) with their joints (type, axis, limits), "
+    "geoms (count, kinds, size) and sites, the top-level bodies that could be the "
+    "hand, and the hand load_model makes of it: to choose root_body, the palm frame "
+    "and the closing joints."
+)
+EXAMPLE = "exactgrasp inspect my_hand.urdf --package-dir my_hand_description=./meshes"
 
 
 def _package_dir(fix: Fix) -> str:
@@ -155,20 +168,7 @@ def cmd_inspect(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``inspect`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser(
-        "inspect",
-        help="the body tree of a URDF/MJCF hand model: joints, limits, geoms, sites",
-        description=described(
-            (
-                "Print the bodies of a URDF or MJCF model (or of a built-in hand: "
-                f"{', '.join(sorted(BUILTIN_HANDS))}) with their joints (type, axis, limits), "
-                "geoms (count, kinds, size) and sites, the top-level bodies that could be the "
-                "hand, and the hand load_model makes of it: to choose root_body, the palm frame "
-                "and the closing joints."
-            ),
-            "exactgrasp inspect my_hand.urdf --package-dir my_hand_description=./meshes",
-        ),
-    )
+    parser = add_command(subparsers, "inspect", cmd_inspect, HELP, DESCRIPTION, EXAMPLE)
     parser.add_argument("model", metavar="MODEL", help="URDF/MJCF file or built-in hand name")
     parser.add_argument(
         "--geometry",
@@ -185,5 +185,4 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="[NAME=]DIR",
         help="where package:// and model:// mesh names are found (repeatable)",
     )
-    parser.set_defaults(func=cmd_inspect)
     return parser

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.backends.base import check_poses
-from exactgrasp.cli.common import GRASP_FLAGS, FlagTerms, described, flag, in_flag_terms
+from exactgrasp.cli.common import GRASP_FLAGS, FlagTerms, add_command, flag, in_flag_terms
 from exactgrasp.errors import ExactGraspError
 from exactgrasp.geometry.intake import UNITS
 
@@ -31,6 +31,17 @@ TERMS = FlagTerms(
         "check_scale": lambda fix: flag("--no-check-scale")(fix) if fix.value is False else None,
     }
 )
+
+
+#: The command's line in ``exactgrasp --help``.
+HELP = "exact intersection volume of two closed meshes (m^3)"
+#: Its ``--help`` description, and the example that follows it.
+DESCRIPTION = (
+    "Print the exact volume of A ∩ B in m^3, B moved by --pose, with its certified "
+    "error bound. Both files must hold closed surfaces (--repair lets trimesh and "
+    "pymeshfix close them)."
+)
+EXAMPLE = "exactgrasp overlap hand.stl object.stl --units mm --pose pose.json"
 
 
 def read_pose(text: str) -> np.ndarray:
@@ -125,18 +136,7 @@ def cmd_overlap(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``overlap`` subcommand to the ``exactgrasp`` parser."""
-    parser = subparsers.add_parser(
-        "overlap",
-        help="exact intersection volume of two closed meshes (m^3)",
-        description=described(
-            (
-                "Print the exact volume of A ∩ B in m^3, B moved by --pose, with its certified "
-                "error bound. Both files must hold closed surfaces (--repair lets trimesh and "
-                "pymeshfix close them)."
-            ),
-            "exactgrasp overlap hand.stl object.stl --units mm --pose pose.json",
-        ),
-    )
+    parser = add_command(subparsers, "overlap", cmd_overlap, HELP, DESCRIPTION, EXAMPLE)
     parser.add_argument("a", metavar="A", help="mesh file that stays (STL, OBJ, PLY, OFF, GLB)")
     parser.add_argument("b", metavar="B", help="mesh file that moves")
     parser.add_argument(
@@ -162,5 +162,4 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         default=True,
         help="refuse meshes longer than 5 m after the unit conversion (default: on)",
     )
-    parser.set_defaults(func=cmd_overlap)
     return parser

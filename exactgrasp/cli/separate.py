@@ -12,9 +12,21 @@ import argparse
 import json
 from typing import Any
 
-from exactgrasp.cli.common import add_grasp_options, described, grasp_from_args
+from exactgrasp.cli.common import add_command, add_grasp_file, add_grasp_options, grasp_from_args
 
 __all__ = ["add_parser", "cmd_separate"]
+
+
+#: The command's line in ``exactgrasp --help``.
+HELP = "move a penetrating object out of the hand by the smallest rigid motion"
+#: Its ``--help`` description, and the example that follows it.
+DESCRIPTION = (
+    "Move GRASP's object out of the hand by gradient steps on the exact intersection "
+    "volume until it reads 0, leaving the object within --tolerance-mm of the hand (in "
+    "contact). With --reclose the fingers open first and close onto the object again. "
+    "Refuses (exit status 2) when the object is enclosed by the hand."
+)
+EXAMPLE = "exactgrasp separate grasp.json -o separated.json --reclose"
 
 
 def cmd_separate(args: argparse.Namespace) -> int:
@@ -58,19 +70,8 @@ def cmd_separate(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``separate`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = subparsers.add_parser(
-        "separate",
-        help="move a penetrating object out of the hand by the smallest rigid motion",
-        description=described(
-            "Move GRASP's object out of the hand by gradient steps on the exact intersection "
-            "volume until it reads 0, leaving the object within --tolerance-mm of the hand (in "
-            "contact). With --reclose the fingers open first and close onto the object again. "
-            "Refuses (exit status 2) when the object is enclosed by the hand.",
-            "exactgrasp separate grasp.json -o separated.json --reclose",
-        ),
-    )
-    parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file")
-    parser.add_argument("-o", "--output", required=True, help="separated grasp JSON file to write")
+    parser = add_command(subparsers, "separate", cmd_separate, HELP, DESCRIPTION, EXAMPLE)
+    add_grasp_file(parser, "separated grasp JSON file to write")
     parser.add_argument(
         "--reclose",
         action="store_true",
@@ -94,5 +95,4 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     add_grasp_options(parser)
-    parser.set_defaults(func=cmd_separate)
     return parser

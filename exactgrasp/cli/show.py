@@ -13,6 +13,17 @@ from exactgrasp.cli.common import add_command, add_grasp_inputs, sampler_and_gra
 __all__ = ["add_parser", "cmd_show"]
 
 
+#: The command's line in ``exactgrasp --help``.
+HELP = "an interactive HTML page (and a PNG) of a grasp and its sampled paths"
+#: Its ``--help`` description, and the example that follows it.
+DESCRIPTION = (
+    "Draw the hand links, the object at the grasp pose, the canonical frame's axes "
+    "and a spread of the sampler's paths (the object's centre, coloured by time) "
+    "into one self-contained HTML page that needs no network to open."
+)
+EXAMPLE = "exactgrasp show box.json -o box.html --png box.png"
+
+
 def cmd_show(args: argparse.Namespace) -> int:
     """Handler of ``exactgrasp show``; prints what it wrote, returns 0."""
     from exactgrasp.view.scene import choose_paths
@@ -35,18 +46,7 @@ def cmd_show(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``show`` sub-command to the ``exactgrasp`` command's subparsers."""
-    parser = add_command(
-        subparsers,
-        "show",
-        cmd_show,
-        help="an interactive HTML page (and a PNG) of a grasp and its sampled paths",
-        text=(
-            "Draw the hand links, the object at the grasp pose, the canonical frame's axes "
-            "and a spread of the sampler's paths (the object's centre, coloured by time) "
-            "into one self-contained HTML page that needs no network to open."
-        ),
-        example="exactgrasp show box.json -o box.html --png box.png",
-    )
+    parser = add_command(subparsers, "show", cmd_show, HELP, DESCRIPTION, EXAMPLE)
     parser.add_argument("grasp", metavar="GRASP", help="grasp JSON file")
     parser.add_argument(
         "-o", "--output", default="grasp.html", help="HTML page to write (default grasp.html)"

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from exactgrasp.cli.common import described
+from exactgrasp.cli.common import add_command
 from exactgrasp.report.args import DESCRIPTION, HELP, add_arguments, run_from_args
 
 __all__ = ["add_parser"]
@@ -18,9 +18,6 @@ __all__ = ["add_parser"]
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``validate`` sub-command to the ``exactgrasp`` command's subparsers."""
     example = "exactgrasp validate --quick --out report"
-    parser = subparsers.add_parser(
-        "validate", help=HELP, description=described(DESCRIPTION, example)
-    )
+    parser = add_command(subparsers, "validate", run_from_args, HELP, DESCRIPTION, example)
     add_arguments(parser)
-    parser.set_defaults(func=run_from_args)
     return parser
