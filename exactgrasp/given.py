@@ -7,17 +7,22 @@ configuration) is only those that were set, and None keeps what the file or defa
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 __all__ = ["given"]
 
 
-def given(**values: Any) -> dict[str, Any]:
-    """``values`` without those that are None, in the order passed.
+def given(values: Mapping[str, Any]) -> dict[str, Any]:
+    """The entries of ``values`` that are not None, in their order.
+
+    Parameters
+    ----------
+    values : mapping of str to any
+        Name -> value of each optional setting, None where the caller set none.
 
     Returns
     -------
     dict
-        Name -> value of every keyword argument that is not None.
     """
     return {name: value for name, value in values.items() if value is not None}

@@ -236,7 +236,7 @@ def run_batch(
         raise BatchError(f"units must be one of {sorted(UNITS)}, got {units!r}.")
     if repair not in (None, True, False):
         raise BatchError(f"repair must be True, False or None, got {repair!r}.")
-    overrides = given(units=units, repair=repair, on_limit=on_limit)
+    overrides = given({"units": units, "repair": repair, "on_limit": on_limit})
     sampler = as_sampler(sampler)
     engine = get_backend(backend, **(backend_params or {}))
     spec = engine if isinstance(backend, Backend) else (backend, dict(backend_params or {}))

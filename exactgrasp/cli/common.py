@@ -357,8 +357,9 @@ def read_grasp(
     """
     from exactgrasp.grasp import Grasp
 
+    overrides = given({"units": units, "repair": repair, "on_limit": on_limit})
     try:
-        return Grasp.from_file(path, **given(units=units, repair=repair, on_limit=on_limit))
+        return Grasp.from_file(path, **overrides)
     except ExactGraspError as exc:
         if not exc.fixes:
             raise

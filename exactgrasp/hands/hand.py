@@ -244,13 +244,15 @@ class Hand:
         Hand
         """
         options = given(
-            root_body=root_body,
-            geometry=geometry,
-            tessellation=tessellation,
-            palm=palm,
-            couplings=couplings,
-            package_dirs=package_dirs,
-            repair=repair,
+            {
+                "root_body": root_body,
+                "geometry": geometry,
+                "tessellation": tessellation,
+                "palm": palm,
+                "couplings": couplings,
+                "package_dirs": package_dirs,
+                "repair": repair,
+            }
         )
         model = load_model_cached(Path(path), options)
         source = {"type": "model", "path": str(Path(path)), "options": jsonable(options)}

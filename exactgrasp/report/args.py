@@ -83,7 +83,7 @@ def overrides(args: argparse.Namespace) -> dict:
     if args.n_cereal is not None:
         out["n_cereal"] = None if args.n_cereal < 0 else args.n_cereal
     names = ("contact_per_object", "noise_copies", "joint_draws", "exact_joint_draws")
-    out.update(given(**{name: getattr(args, name) for name in names}))
+    out.update(given({name: getattr(args, name) for name in names}))
     if args.exact_noise_samplers is not None:
         out["exact_noise_samplers"] = tuple(p for p in args.exact_noise_samplers.split(",") if p)
     return out
