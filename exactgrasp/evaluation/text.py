@@ -9,19 +9,20 @@ from __future__ import annotations
 import math
 from typing import Any
 
-__all__ = ["report_markdown", "smallest_within_interval"]
+__all__ = ["number", "report_markdown", "smallest_within_interval"]
 
 GOAL = 0.90
 
 
-def _f(x: Any, digits: int = 3) -> str:
+def number(x: Any, digits: int = 3) -> str:
+    """``x`` with ``digits`` decimals, ``n/a`` for None or NaN."""
     if x is None or (isinstance(x, float) and math.isnan(x)):
         return "n/a"
     return f"{x:.{digits}f}"
 
 
 def _ci(e: dict) -> str:
-    return f"{_f(e['auc'])} ({_f(e['low'])} .. {_f(e['high'])})"
+    return f"{number(e['auc'])} ({number(e['low'])} .. {number(e['high'])})"
 
 
 def _table_head(*columns: str) -> list[str]:
@@ -88,8 +89,8 @@ def _clusters(s: dict) -> list[str]:
         "",
         f"The default distance, **{default}**, reaches AUC {_ci(d)} with the voxel backend and "
         f"{_ci(ex[default])} with the exact one (resampling whole clusters instead of grasps, "
-        f"the voxel interval widens to {_f(d['group_interval'][0])} .. "
-        f"{_f(d['group_interval'][1])}); the best baseline, {best[0]}, "
+        f"the voxel interval widens to {number(d['group_interval'][0])} .. "
+        f"{number(d['group_interval'][1])}); the best baseline, {best[0]}, "
         f"{_ci(best[1])}. The goal of {GOAL:.2f} is "
         + ("reached." if reached else "not reached with the voxel backend.")
         + " Baselines: `joints` is the L2 distance of the 8 joint values (radians); "
@@ -105,7 +106,7 @@ def _clusters(s: dict) -> list[str]:
         *_table_head("cluster", "AUC", "same pairs", "different pairs"),
     ]
     for g, e in sorted(d["groups"].items(), key=lambda kv: int(kv[0])):
-        lines.append(f"| {g} | {_f(e['auc'])} | {e['n_same']} | {e['n_different']} |")
+        lines.append(f"| {g} | {number(e['auc'])} | {e['n_same']} | {e['n_different']} |")
     lines += _figures(
         ("ROC curves", "roc-clusters.png"), ("AUC of every distance", "auc-clusters.png")
     )
@@ -126,7 +127,7 @@ def _noise(s: dict) -> list[str]:
     ]
     for n in names:
         cells = "".join(
-            f" {_f(levels[k][n]['auc'])} | {_f(levels[k][n]['ratio_of_medians'], 1)} |"
+            f" {number(levels[k][n]['auc'])} | {number(levels[k][n]['ratio_of_medians'], 1)} |"
             for k in keys
         )
         lines.append(f"| {n} |{cells}")
@@ -147,7 +148,7 @@ def _default(s: dict) -> list[str]:
     ]
     for r in d["rows"]:
         lines.append(
-            f"| {r['name']} | {'yes' if r['qualifies'] else 'no'} | {_f(r['cluster_auc'])} |"
+            f"| {r['name']} | {'yes' if r['qualifies'] else 'no'} | {number(r['cluster_auc'])} |"
         )
     lines += ["", f"Chosen: **{d['default']}**.", ""]
     return lines
@@ -180,12 +181,12 @@ def _sampling(s: dict) -> list[str]:
         noise_auc = noise = ""
         if "noise" in r:
             levels = r["noise"]["levels"].values()
-            noise_auc = ", ".join(_f(v[sm["distance"]]["auc"]) for v in levels)
-            noise = ", ".join(_f(v[sm["distance"]]["ratio_of_medians"], 1) for v in levels)
+            noise_auc = ", ".join(number(v[sm["distance"]]["auc"]) for v in levels)
+            noise = ", ".join(number(v[sm["distance"]]["ratio_of_medians"], 1) for v in levels)
         lines.append(
             f"| {r['label']} | {r['n_paths']} | {r['n_steps']} | {r['backend']} | "
-            f"{_f(r['seconds_per_grasp'], 2)} | {_ci(r['auc'])} | {_f(r['auc_l2']['auc'])} | "
-            f"{noise_auc} | {noise} |"
+            f"{number(r['seconds_per_grasp'], 2)} | {_ci(r['auc'])} | "
+            f"{number(r['auc_l2']['auc'])} | {noise_auc} | {noise} |"
         )
     lines.append("")
     for backend in ("voxel", "exact"):
@@ -195,9 +196,10 @@ def _sampling(s: dict) -> list[str]:
             lines.append(
                 f"- {backend}: the largest sampler run ({large['n_paths']} paths) reaches "
                 f"{_ci(large['auc'])}; the smallest whose AUC is within that interval is "
-                f"**{small['label']}** ({small['n_paths']} paths, AUC {_f(small['auc']['auc'])}, "
-                f"{_f(small['seconds_per_grasp'], 2)} s per grasp against "
-                f"{_f(large['seconds_per_grasp'], 2)} s)."
+                f"**{small['label']}** ({small['n_paths']} paths, AUC "
+                f"{number(small['auc']['auc'])}, {number(small['seconds_per_grasp'], 2)} s per "
+                "grasp against "
+                f"{number(large['seconds_per_grasp'], 2)} s)."
             )
     separating = sorted(
         (
@@ -234,19 +236,20 @@ def _raw(s: dict) -> list[str]:
         *_table_head("distance", "adjusted", "raw"),
     ]
     for name in vox:
-        lines.append(f"| {name} | {_f(r['adjusted_reference'][name])} | {_ci(vox[name])} |")
+        lines.append(f"| {name} | {number(r['adjusted_reference'][name])} | {_ci(vox[name])} |")
     for name, e in r["baselines"].items():
         adjusted = s["clusters"]["baselines"][name]["auc"]
-        lines.append(f"| baseline: {name} | {_f(adjusted)} | {_ci(e)} |")
+        lines.append(f"| baseline: {name} | {number(adjusted)} | {_ci(e)} |")
     lines += [
         "",
         f"L2 distance of a raw record to its own adjusted grasp: median "
-        f"{_f(a['l2_raw_to_adjusted_median'])}, max {_f(a['l2_raw_to_adjusted_max'])}; the "
-        f"median distance between two different adjusted grasps is "
-        f"{_f(a['l2_between_adjusted_median'])}, and "
+        f"{number(a['l2_raw_to_adjusted_median'])}, max "
+        f"{number(a['l2_raw_to_adjusted_max'])}; the median distance between two different "
+        "adjusted grasps is "
+        f"{number(a['l2_between_adjusted_median'])}, and "
         f"{a['fraction_of_pairs_closer_than_median_adjustment']:.0%} of those pairs are closer "
         "than a typical adjustment moves a grasp. Median of the largest descriptor value: raw "
-        f"{_f(a['max_value_raw_median'])}, adjusted {_f(a['max_value_adjusted_median'])}.",
+        f"{number(a['max_value_raw_median'])}, adjusted {number(a['max_value_adjusted_median'])}.",
     ]
     return lines + _figures(("AUC of every distance, raw records", "auc-raw.png"))
 
@@ -322,10 +325,10 @@ def _hands(s: dict) -> list[str]:
         for how in hows:
             row = e["normalisations"][how]
             within = ", ".join(
-                f"{names.get(x, x)} {_f(row[f'median_{x}_pairs'], 4)}" for x in g.split(" / ")
+                f"{names.get(x, x)} {number(row[f'median_{x}_pairs'], 4)}" for x in g.split(" / ")
             )
             lines.append(
-                f"| {shown(g)} | {how} | {_f(row['median_same_placement'], 4)} | {within} |"
+                f"| {shown(g)} | {how} | {number(row['median_same_placement'], 4)} | {within} |"
             )
     lines.append("")
     for g, e in groups.items():

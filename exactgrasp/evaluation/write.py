@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 from exactgrasp.evaluation.evaluate import EvaluationResult
+from exactgrasp.evaluation.text import number
 from exactgrasp.report.figures import save_figure
 
 __all__ = ["auc_table", "finish_roc", "roc_figure", "write_evaluation"]
@@ -46,18 +46,14 @@ def finish_roc(fig, ax, path: Path, title: str, *, x_label: str, y_label: str) -
     return save_figure(fig, path)
 
 
-def _fmt(x: float) -> str:
-    return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.3f}"
-
-
 def auc_table(result: EvaluationResult) -> list[str]:
     """Markdown rows: distance, AUC, interval, per-group AUCs."""
     groups = sorted({g for ev in result.evaluations.values() for g in ev.groups})
     head = "| distance | AUC | interval |" + "".join(f" {g} |" for g in groups)
     rows = [head, "|---" * (3 + len(groups)) + "|"]
     for name, ev in result.evaluations.items():
-        cells = [name, _fmt(ev.auc), f"{_fmt(ev.low)} .. {_fmt(ev.high)}"]
-        cells += [_fmt(ev.groups.get(g, {}).get("auc", float("nan"))) for g in groups]
+        cells = [name, number(ev.auc), f"{number(ev.low)} .. {number(ev.high)}"]
+        cells += [number(ev.groups.get(g, {}).get("auc", float("nan"))) for g in groups]
         rows.append("| " + " | ".join(cells) + " |")
     return rows
 
