@@ -122,37 +122,8 @@ def build_report(
     sections_dir = cache / ("sections-quick" if quick else "sections")
     sections_dir.mkdir(parents=True, exist_ok=True)
 
-    previous: dict[str, Any] = {}
-    if sections is not None:
-        unknown = sorted(set(sections) - set(SECTIONS))
-        if unknown:
-            raise EvaluationError(f"unknown sections {unknown}; the sections: {list(SECTIONS)}")
-        try:
-            previous = json.loads((out / "summary.json").read_text())
-        except (OSError, ValueError) as exc:
-            raise EvaluationError(
-                f"--sections needs the report's existing summary.json for the other "
-                f"sections' numbers: {exc}"
-            ) from None
-        if bool(previous.get("quick")) != quick:
-            raise EvaluationError(
-                f"{out / 'summary.json'} is {'a quick' if previous.get('quick') else 'a full'} "
-                "run; --sections keeps its other sections, so run with the same --quick setting."
-            )
-
-    def section(name: str, compute: Callable[[], dict]) -> dict:
-        if sections is not None and name not in sections:
-            return previous[name]
-        file = sections_dir / f"{name}.json"
-        if file.exists() and not fresh:
-            return json.loads(file.read_text())
-        t = time.perf_counter()
-        value = compute()
-        value["section_seconds"] = time.perf_counter() - t
-        file.write_text(json.dumps(value, default=float))
-        log(f"section {name}: {value['section_seconds']:.0f} s")
-        return value
-
+    previous = {} if sections is None else _previous_summary(out, sections, quick)
+    section = _Sections(sections_dir, sections, previous, fresh, log).get
     clusters = section("clusters", lambda: clusters_section(study, main))
     noise = section("noise", lambda: noise_section(study, main))
     chosen = choose_default(clusters, noise)
@@ -165,30 +136,16 @@ def build_report(
     )
     raw = section("raw", lambda: raw_section(study, main, clusters))
     hands = section("hands", lambda: hands_section(study, main, default))
-
-    figures = out / "figures"
-    # Each figure with the section it draws (ROC curves are not kept in summary.json, so a
-    # section taken from it keeps its figures as they are).
-    drawers = {
-        "roc": (
-            "clusters",
-            lambda: fig.roc_figure(clusters, default, figures / "roc-clusters.png"),
-        ),
-        "aucs": (
-            "clusters",
-            lambda: fig.auc_bars(
-                clusters, figures / "auc-clusters.png", "adjusted contact grasps"
-            ),
-        ),
-        "raw": ("raw", lambda: fig.auc_bars(raw, figures / "auc-raw.png", "raw study records")),
-        "sampling": ("sampling", lambda: fig.sampling_figure(sampling, figures / "sampling.png")),
-        "steps": ("sampling", lambda: fig.steps_figure(sampling, figures / "steps.png")),
-        "hands": ("hands", lambda: fig.hands_figure(hands, figures / "hands.png")),
-    }
-    drawn = {
-        key: draw() if sections is None or name in sections else out / previous["figures"][key]
-        for key, (name, draw) in drawers.items()
-    }
+    drawn = _figures(
+        out,
+        sections,
+        previous,
+        default,
+        clusters=clusters,
+        raw=raw,
+        sampling=sampling,
+        hands=hands,
+    )
     today = datetime.date.today().isoformat()
     runs = {name: {"command": command, "date": today} for name in sections or ()}
     summary = {
@@ -213,3 +170,86 @@ def build_report(
     (out / "report.md").write_text(report_markdown(summary))
     log(f"wrote {out / 'report.md'}")
     return summary
+
+
+def _previous_summary(out: Path, sections: tuple[str, ...], quick: bool) -> dict[str, Any]:
+    """The report's existing ``summary.json``, whose numbers the sections not in ``sections``
+    keep; refused when a section is unknown, the file is missing or it is not a ``quick`` run
+    like this one."""
+    unknown = sorted(set(sections) - set(SECTIONS))
+    if unknown:
+        raise EvaluationError(f"unknown sections {unknown}; the sections: {list(SECTIONS)}")
+    try:
+        previous = json.loads((out / "summary.json").read_text())
+    except (OSError, ValueError) as exc:
+        raise EvaluationError(
+            f"--sections needs the report's existing summary.json for the other "
+            f"sections' numbers: {exc}"
+        ) from None
+    if bool(previous.get("quick")) != quick:
+        raise EvaluationError(
+            f"{out / 'summary.json'} is {'a quick' if previous.get('quick') else 'a full'} "
+            "run; --sections keeps its other sections, so run with the same --quick setting."
+        )
+    return previous
+
+
+class _Sections:
+    """Each section's numbers: the existing summary's for a section not asked for, else those
+    kept in ``folder/NAME.json`` (unless ``fresh``), else computed and kept there."""
+
+    def __init__(self, folder: Path, asked, previous: dict, fresh: bool, log) -> None:
+        self.folder, self.asked, self.previous = folder, asked, previous
+        self.fresh, self.log = fresh, log
+
+    def get(self, name: str, compute: Callable[[], dict]) -> dict:
+        """The numbers of section ``name``; ``compute()`` makes them."""
+        if self.asked is not None and name not in self.asked:
+            return self.previous[name]
+        file = self.folder / f"{name}.json"
+        if file.exists() and not self.fresh:
+            return json.loads(file.read_text())
+        t = time.perf_counter()
+        value = compute()
+        value["section_seconds"] = time.perf_counter() - t
+        file.write_text(json.dumps(value, default=float))
+        self.log(f"section {name}: {value['section_seconds']:.0f} s")
+        return value
+
+
+def _figures(
+    out: Path,
+    sections: tuple[str, ...] | None,
+    previous: dict,
+    default: str,
+    *,
+    clusters: dict,
+    raw: dict,
+    sampling: dict,
+    hands: dict,
+) -> dict[str, Path]:
+    """Every figure of the report by key: drawn into ``out/figures`` from its section's
+    numbers when the section was computed, else the existing summary's file."""
+    figures = out / "figures"
+    # Each figure with the section it draws (ROC curves are not kept in summary.json, so a
+    # section taken from it keeps its figures as they are).
+    drawers = {
+        "roc": (
+            "clusters",
+            lambda: fig.roc_figure(clusters, default, figures / "roc-clusters.png"),
+        ),
+        "aucs": (
+            "clusters",
+            lambda: fig.auc_bars(
+                clusters, figures / "auc-clusters.png", "adjusted contact grasps"
+            ),
+        ),
+        "raw": ("raw", lambda: fig.auc_bars(raw, figures / "auc-raw.png", "raw study records")),
+        "sampling": ("sampling", lambda: fig.sampling_figure(sampling, figures / "sampling.png")),
+        "steps": ("sampling", lambda: fig.steps_figure(sampling, figures / "steps.png")),
+        "hands": ("hands", lambda: fig.hands_figure(hands, figures / "hands.png")),
+    }
+    return {
+        key: draw() if sections is None or name in sections else out / previous["figures"][key]
+        for key, (name, draw) in drawers.items()
+    }
