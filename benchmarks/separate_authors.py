@@ -127,9 +127,13 @@ def batch(data: Path, fingers: str, limit: int | None, every: int, out: Path | N
 
     with open(data / RAW / "index.csv") as fh:
         records = [(r["object"], r["record"]) for r in csv.DictReader(fh)]
-    rows = []
+    # A batch killed part-way resumes from its JSON file: the records there are not run again.
+    rows = json.loads(out.read_text()) if out and out.exists() else []
+    done = {(r["object"], r["record"]) for r in rows}
     for obj, record in records[::every][:limit]:
-        t0 = time.perf_counter()
+        if (obj, record) in done:
+            continue
+        t0, c0 = time.perf_counter(), time.process_time()
         row = {"object": obj, "record": record}
         try:
             # FoodClip.STL is open (the data's README: it had to be closed for its checks).
@@ -141,6 +145,7 @@ def batch(data: Path, fingers: str, limit: int | None, every: int, out: Path | N
         except eg.ExactGraspError as exc:
             row["error"] = f"{type(exc).__name__}: {exc}"
         row["seconds"] = time.perf_counter() - t0
+        row["cpu_seconds"] = time.process_time() - c0
         rows.append(row)
         ok = sum(bool(r.get("in_contact")) for r in rows)
         print(
