@@ -21,6 +21,7 @@ import exactgrasp as eg
 from exactgrasp.backends import registry
 from exactgrasp.backends.params import Interval, Options, Param
 from exactgrasp.backends.registry import backend_class
+from exactgrasp.backends.voxel import VoxelBackend
 from exactgrasp.cli import build_parser, main
 from exactgrasp.cli import descriptor as descriptor_command
 from exactgrasp.cli.common import sampler_from_args
@@ -89,8 +90,7 @@ def test_descriptor_and_compare_commands(grasp_file, tmp_path, capsys):
     api = eg.compute_descriptor(
         eg.Grasp.from_file(grasp_file),
         eg.PathSampler.preset("balanced", n_steps=3),
-        backend="voxel",
-        object_resolution=20,
+        backend=VoxelBackend(object_resolution=20),
     )
     assert np.array_equal(api.values, d.values)
     assert d.values.max() > 0
@@ -358,8 +358,7 @@ def test_compare_routes_params_per_backend(grasp_file, tmp_path):
     api = eg.compute_descriptor(
         eg.Grasp.from_file(grasp_file),
         eg.PathSampler(2, 1, 1, n_steps=2),
-        object_resolution=12,
-        hand_resolution=24,
+        backend=VoxelBackend(object_resolution=12, hand_resolution=24),
     )
     np.testing.assert_allclose(voxel, api.values.ravel(), rtol=1e-12)
 
@@ -400,8 +399,7 @@ def test_units_override_the_grasp_file(tmp_path, capsys):
     api = eg.compute_descriptor(
         eg.Grasp.from_file(right),
         eg.PathSampler(2, 1, 1, n_steps=2),
-        object_resolution=12,
-        hand_resolution=24,
+        backend=VoxelBackend(object_resolution=12, hand_resolution=24),
     )
     np.testing.assert_array_equal(eg.Descriptor.load(out).values, api.values)
     assert (
