@@ -57,5 +57,3 @@ __all__ = [
 ]
 
 
-#: The old name of `get_builtin`.
-get = get_builtin

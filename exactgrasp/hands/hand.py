@@ -379,7 +379,7 @@ def _as_solid(mesh: Any, units: str, name: str) -> Solid:
         return Solid(mesh.vertices, mesh.faces, units=units, name=name)
     if isinstance(mesh, tuple | list) and len(mesh) == 2:
         return Solid(mesh[0], mesh[1], units=units, name=name)
-    raise JointError(
+    raise MeshError(
         f"link {name}: expected a trimesh.Trimesh, a Solid or a (vertices, faces) pair, got "
         f"{type(mesh).__name__}."
     )
