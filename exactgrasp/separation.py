@@ -23,7 +23,7 @@ from exactgrasp.backends.exact import ExactBackend
 from exactgrasp.backends.registry import as_backend
 from exactgrasp.errors import SeparationError
 from exactgrasp.geometry.se3 import exp_se3
-from exactgrasp.grasp.closing import close_fingers, closing_directions
+from exactgrasp.grasp.closing import close_fingers_result, closing_directions
 from exactgrasp.grasp.grasp import Grasp
 
 __all__ = ["PUSH_MM", "ROTATION_SCALE", "Separation", "in_contact", "separate"]
@@ -262,7 +262,7 @@ def _finish(grasp, work, pose, fingers, before, steps, direction, backend) -> Se
         # a hair (its warning is this function's business: the motion reports it).
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            closed = close_fingers(hand, grasp.object, new_pose, backoff=True, full_output=True)
+            closed = close_fingers_result(hand, grasp.object, new_pose, backoff=True)
         hand, new_pose = closed.hand, closed.object_pose
         motion = new_pose @ np.linalg.inv(grasp.object_pose)
     out = Grasp(hand, grasp.object, new_pose, name=grasp.name)

@@ -443,11 +443,8 @@ def test_close_command_writes_the_closed_grasp(barrett_box_file, tmp_path, capsy
     text = capsys.readouterr().out
     assert "box: 3 of 3 fingers touch the object (coal)" in text
     closed = eg.Grasp.from_file(out)
-    api = eg.close_fingers(
-        eg.Grasp.from_file(barrett_box_file).hand,
-        closed.object,
-        closed.object_pose,
-        full_output=True,
+    api = eg.close_fingers_result(
+        eg.Grasp.from_file(barrett_box_file).hand, closed.object, closed.object_pose
     )
     for finger, result in enumerate(api.fingers, start=1):
         med, dist = result.joints
@@ -497,7 +494,7 @@ def test_close_command_backs_off_a_penetrating_object(tmp_path, capsys):
     assert main(argv) == 0
     captured = capsys.readouterr()
     assert re.search(r"\(coal; the object moved 11\.4\d\d mm out along the palm", captured.out)
-    assert "full_output" not in captured.err
+    assert "close_fingers_result" not in captured.err
     closed = eg.Grasp.from_file(tmp_path / "c.json")
     assert closed.object_pose[2, 3] == pytest.approx(pose[2, 3] + 0.01144, abs=1e-4)
     err = _error(capsys, [*argv, "--no-backoff"])

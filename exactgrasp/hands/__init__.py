@@ -55,5 +55,3 @@ __all__ = [
     "parallel_gripper",
     "parallel_gripper_model",
 ]
-
-
