@@ -13,7 +13,7 @@ import numpy as np
 from scipy.spatial.distance import pdist, squareform
 
 from exactgrasp.backends import Backend
-from exactgrasp.backends.base import check_poses, repeated_poses
+from exactgrasp.backends.base import repeated_poses
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.backends.registry import as_backend
 from exactgrasp.diagnostics import check_descriptor
@@ -118,13 +118,14 @@ def compute_volumes(
 
     Poses equal to rounding (`backends.base.repeated_poses`: the balanced preset repeats a
     quarter of its poses) go to the backend once, all in one
-    `Backend.volumes_with_progress` call that feeds the bar.
+    `Backend.volumes_with_progress` call that feeds the bar; the backend checks them (a
+    sampler's poses are rigid by construction).
 
     Returns
     -------
     numpy.ndarray, shape poses.shape[:-2], canonical volume units
     """
-    poses = check_poses(poses)
+    poses = np.asarray(poses, dtype=np.float64)
     flat = poses.reshape(-1, 4, 4)
     first, back = np.unique(repeated_poses(flat), return_inverse=True)
     if len(first) < len(flat):  # the bar counts the poses computed: say why it counts fewer

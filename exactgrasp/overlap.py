@@ -21,7 +21,7 @@ from exactgrasp.backends.exact.gradients import object_twist, volume_moments
 from exactgrasp.backends.registry import as_backend
 from exactgrasp.backends.voxel import VoxelBackend
 from exactgrasp.errors import BackendError, Fix, MeshError
-from exactgrasp.geometry.intake import UNITS, unit_scale
+from exactgrasp.geometry.intake import REPAIR, UNITS, unit_scale
 from exactgrasp.geometry.solid import Solid
 
 __all__ = ["Overlap", "as_solid", "intersection", "intersection_gradient", "intersection_volume"]
@@ -39,7 +39,7 @@ def as_solid(
     name: str = "mesh",
     *,
     units: str = "m",
-    repair: bool = False,
+    repair: bool = REPAIR,
     check_scale: bool = True,
 ) -> Solid:
     """One closed mesh, in any accepted form, as a validated `Solid` (metres).
@@ -203,7 +203,7 @@ def intersection(
     backend: str | ExactBackend = "exact",
     *,
     units: str | tuple[str, str] = "m",
-    repair: bool = False,
+    repair: bool = REPAIR,
     check_scale: bool = True,
 ) -> Overlap:
     """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3, with its bound.
@@ -268,7 +268,7 @@ def intersection_gradient(
     backend: str | ExactBackend = "exact",
     *,
     units: str | tuple[str, str] = "m",
-    repair: bool = False,
+    repair: bool = REPAIR,
     check_scale: bool = True,
 ) -> np.ndarray:
     """Derivative of the exact volume of ``a`` ∩ ``b`` by a rigid motion of ``b``.

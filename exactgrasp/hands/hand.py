@@ -19,6 +19,7 @@ import numpy as np
 import trimesh
 
 from exactgrasp.errors import Fix, FrameError, JointError, MeshError
+from exactgrasp.geometry.intake import REPAIR
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.loading import jsonable, load_model_cached
@@ -135,7 +136,7 @@ class Hand:
         path: str | os.PathLike,
         frame: HandFrame | None = None,
         units: str = "m",
-        repair: bool = False,
+        repair: bool = REPAIR,
     ) -> Hand:
         """A rigid hand from one mesh file: one link, the solid its closed shells bound.
 

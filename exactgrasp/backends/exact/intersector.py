@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.backends import defaults
-from exactgrasp.backends.base import check_poses, repeated_poses, resolve_jobs
+from exactgrasp.backends.base import repeated_poses, resolve_jobs
 from exactgrasp.backends.exact.culling import (
     crossing_poses,
     culled_poses,
@@ -363,8 +363,10 @@ class ExactIntersector:
 
         Parameters
         ----------
-        poses : numpy.ndarray, shape (..., 4, 4)
-            Rigid transforms of the object: vertex ``x`` moves to ``R @ x + t``.
+        poses : numpy.ndarray, shape (..., 4, 4), float64
+            Rigid transforms of the object: vertex ``x`` moves to ``R @ x + t``, as
+            `exactgrasp.backends.base.check_poses` returns them. Not checked again here: the
+            public entries (`ExactBackend`'s methods, `exactgrasp.overlap`) check them once.
         progress : callable, optional
             Called in the calling thread with the number of poses finished since its last
             call, as each piece of the work ends (the counts add up to the number of poses).
@@ -401,7 +403,6 @@ class ExactIntersector:
     def _run(self, poses, progress, with_moments):
         """`intersect`'s result, and with ``with_moments`` the link moments (shape
         ``+ (L, 6)``, local coordinates; else ``+ (0, 6)``)."""
-        poses = check_poses(poses)
         t0 = time.perf_counter()
         # The same motions about the local origin c: x -> R x + (R c + t - c); repeats are
         # found there, so that their tolerance scales with the local geometry.
