@@ -497,9 +497,8 @@ def test_a_backend_is_configured_only_by_its_instance(module):
     found = []
     for function in functions(module):
         names = parameter_names(function)
-        if "backend_params" in names or (function.args.kwarg or ast.arg("")).arg == (
-            "backend_params"
-        ):
+        kwarg = function.args.kwarg.arg if function.args.kwarg else None
+        if "backend_params" in (*names, kwarg):
             found.append(f"{function.name}: backend_params")
         if room(module) == "backends":
             continue

@@ -380,7 +380,7 @@ def test_volumes_with_progress_reports_every_pose():
     np.testing.assert_array_equal(backend.volumes_with_progress(grasp, poses[:2]), volumes[:2])
 
 
-def test_hand_volume_is_computed_once_per_hand():
+def test_hand_volume_is_computed_once_per_hand_and_backend():
     class CountingGrasp(ArrayGrasp):
         unions = 0
 
@@ -390,8 +390,9 @@ def test_hand_volume_is_computed_once_per_hand():
             return 8.0
 
     grasp = CountingGrasp([box_arrays([-1, -1, -1], [1, 1, 1.5])], HAND_BOX)
-    assert VoxelBackend().hand_volume(grasp) == 8.0
-    assert VoxelBackend(hand_resolution=20).hand_volume(CountingGrasp(grasp.links, [])) == 8.0
+    backend = VoxelBackend()
+    assert backend.hand_volume(grasp) == 8.0
+    assert backend.hand_volume(CountingGrasp(grasp.links, [])) == 8.0
     assert CountingGrasp.unions == 1
 
 

@@ -19,6 +19,12 @@ VOXEL_OBJECT_RESOLUTION = 50
 #: How many cubic voxels a grid's shorter side gets: "floor" (the authors' code, the default)
 #: or "round".
 VOXEL_GRID_RULES = ("floor", "round")
+#: The grid rule used when none is named.
+VOXEL_GRID_RULE = VOXEL_GRID_RULES[0]
+#: Weight of a surface sample: "paper" (w_s = V_o/2 * 1/16, the default) or "area".
+VOXEL_SURFACE_WEIGHT = "paper"
+#: Seed of the voxel backend's surface sampler.
+VOXEL_SEED = 0
 #: Hand grids and object point sets a `VoxelBackend` keeps, each (least recently used first out).
 VOXEL_CACHE_SIZE = 8
 

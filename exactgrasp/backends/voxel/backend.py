@@ -106,9 +106,9 @@ class VoxelBackend(Backend):
         object_resolution: int = defaults.VOXEL_OBJECT_RESOLUTION,
         surface_spacing: float | None = None,
         surface_samples: int | str | None = None,
-        surface_weight: str = "paper",
-        seed: int = 0,
-        grid: str = "floor",
+        surface_weight: str = defaults.VOXEL_SURFACE_WEIGHT,
+        seed: int = defaults.VOXEL_SEED,
+        grid: str = defaults.VOXEL_GRID_RULE,
     ):
         given = validate_parameters(
             self.parameter_constraints,
