@@ -183,16 +183,16 @@ def stack_timing(case: dict, args, rng) -> dict:
     The call's fixed cost (the intersector's unions and grids) is what a one-pose call
     costs; what each further pose adds is ``(stack call - one-pose call) / (poses - 1)``.
     """
+    from exactgrasp.backends.exact import ExactBackend
     from exactgrasp.geometry.manifold import to_manifold
     from exactgrasp.overlap import intersection_volume
 
     hand, obj, pose = load(case["file"])
     poses = nearby_poses(translation(0, 0, -0.001 * case["push_mm"]) @ pose, args.stack, rng)
-    one_s, _ = median_time(lambda: intersection_volume(hand, obj, poses[0]), args.repeat)
-    one_bvh_s, _ = median_time(
-        lambda: intersection_volume(hand, obj, poses[0], broadphase="coal"), args.repeat
-    )
-    stack_s, volumes = median_time(lambda: intersection_volume(hand, obj, poses), args.repeat)
+    plain, bvh = ExactBackend(broadphase=None, n_jobs=1), ExactBackend(n_jobs=1)
+    one_s, _ = median_time(lambda: intersection_volume(hand, obj, poses[0], plain), args.repeat)
+    one_bvh_s, _ = median_time(lambda: intersection_volume(hand, obj, poses[0], bvh), args.repeat)
+    stack_s, volumes = median_time(lambda: intersection_volume(hand, obj, poses, bvh), args.repeat)
     A = to_manifold(hand.vertices, hand.faces, "hand")
     B = to_manifold(obj.vertices, obj.faces, "object")
     boolean_s, reference = median_time(

@@ -49,7 +49,7 @@ if TYPE_CHECKING:
     from exactgrasp.geometry import objects
     from exactgrasp.geometry.solid import Solid
     from exactgrasp.grasp import Grasp
-    from exactgrasp.grasp.closing import close_fingers
+    from exactgrasp.grasp.closing import close_fingers, close_fingers_result
     from exactgrasp.grasp.noise import joint_noise, object_pose_noise
     from exactgrasp.hands.frame import HandFrame
     from exactgrasp.hands.hand import Hand
@@ -80,7 +80,7 @@ __getattr__, __dir__ = lazy_names(
         "exactgrasp.hands.frame": ("HandFrame",),
         "exactgrasp.hands.hand": ("Hand",),
         "exactgrasp.paths.sampler": ("PathSampler",),
-        "exactgrasp.grasp.closing": ("close_fingers",),
+        "exactgrasp.grasp.closing": ("close_fingers", "close_fingers_result"),
         "exactgrasp.compare": ("compare_backends",),
         "exactgrasp.batch": ("run_batch", "read_batch"),
         "exactgrasp.overlap": ("intersection", "intersection_gradient", "intersection_volume"),
@@ -119,6 +119,7 @@ __all__ = [
     "__version__",
     "available_backends",
     "close_fingers",
+    "close_fingers_result",
     "compare_backends",
     "compute_descriptor",
     "distance",

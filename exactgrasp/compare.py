@@ -12,8 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.backends import Backend, get_backend
+from exactgrasp.backends import Backend
 from exactgrasp.backends.defaults import COMPARED_BACKENDS
+from exactgrasp.backends.registry import as_backend
 from exactgrasp.descriptor import compute_volumes
 from exactgrasp.errors import ExactGraspError
 from exactgrasp.grasp import Grasp
@@ -144,7 +145,8 @@ def compare_backends(
     sampler : PathSampler or str or dict, optional
         Anything `exactgrasp.paths.as_sampler` takes; default: the ``"balanced"`` preset.
     backends : sequence of str or Backend
-        At least two; the LAST is the reference (e.g. ``("voxel", "exact")``).
+        At least two, each a registered name (library defaults) or a configured instance;
+        the LAST is the reference (e.g. ``("voxel", ExactBackend(broadphase=None))``).
     progress : bool, optional
 
     Returns
@@ -157,7 +159,7 @@ def compare_backends(
             "backends=('voxel', 'exact')."
         )
     sampler = as_sampler(sampler)
-    instances = [get_backend(b) for b in backends]
+    instances = [as_backend(b) for b in backends]
     names = [b.name for b in instances]
     labels = [f"{n}{i}" if names.count(n) > 1 else n for i, n in enumerate(names)]
     poses = sampler.poses()

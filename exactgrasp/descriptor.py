@@ -12,9 +12,10 @@ from typing import Any
 import numpy as np
 from scipy.spatial.distance import pdist, squareform
 
-from exactgrasp.backends import Backend, get_backend
-from exactgrasp.backends.base import check_poses, repeated_poses
+from exactgrasp.backends import Backend
+from exactgrasp.backends.base import repeated_poses
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
+from exactgrasp.backends.registry import as_backend
 from exactgrasp.diagnostics import check_descriptor
 from exactgrasp.errors import DescriptorError
 from exactgrasp.grasp import Grasp
@@ -117,13 +118,14 @@ def compute_volumes(
 
     Poses equal to rounding (`backends.base.repeated_poses`: the balanced preset repeats a
     quarter of its poses) go to the backend once, all in one
-    `Backend.volumes_with_progress` call that feeds the bar.
+    `Backend.volumes_with_progress` call that feeds the bar; the backend checks them (a
+    sampler's poses are rigid by construction).
 
     Returns
     -------
     numpy.ndarray, shape poses.shape[:-2], canonical volume units
     """
-    poses = check_poses(poses)
+    poses = np.asarray(poses, dtype=np.float64)
     flat = poses.reshape(-1, 4, 4)
     first, back = np.unique(repeated_poses(flat), return_inverse=True)
     if len(first) < len(flat):  # the bar counts the poses computed: say why it counts fewer
@@ -145,7 +147,6 @@ def compute_descriptor(
     sampler: PathSampler | str | dict | None = None,
     backend: Backend | str = DEFAULT_BACKEND,
     progress: bool | None = None,
-    **backend_params: Any,
 ) -> Descriptor:
     """The paper's descriptor of a grasp.
 
@@ -155,11 +156,11 @@ def compute_descriptor(
     sampler : PathSampler or str or dict, optional
         Anything `exactgrasp.paths.as_sampler` takes; default: the ``"balanced"`` preset.
     backend : str or Backend
-        ``"voxel"`` (default, the paper's estimator) or ``"exact"``.
+        A registered name with the library defaults (``"voxel"``, the default, the paper's
+        estimator; ``"exact"``) or a configured instance, e.g.
+        ``ExactBackend(broadphase=None, n_jobs=1)``.
     progress : bool, optional
         Show a progress bar; default: only when stderr is a terminal.
-    **backend_params
-        Passed to `get_backend` when ``backend`` is a name.
 
     Returns
     -------
@@ -169,7 +170,7 @@ def compute_descriptor(
     from exactgrasp.version import __version__
 
     sampler = as_sampler(sampler)
-    backend = get_backend(backend, **backend_params)
+    backend = as_backend(backend)
     start, compiling = time.perf_counter(), compile_seconds()
     volumes = compute_volumes(grasp, sampler.poses(), backend, progress, f"{backend.name} poses")
     # The backend's own union where it has one (the exact backend's), not a second one.

@@ -8,7 +8,6 @@ cannot be certified). See ``docs/penetration-volume.md``.
 
 from __future__ import annotations
 
-import importlib.util
 import os
 from dataclasses import dataclass
 from typing import Any
@@ -16,12 +15,13 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from exactgrasp.backends import defaults
 from exactgrasp.backends.base import check_poses
-from exactgrasp.backends.exact import ExactIntersector
+from exactgrasp.backends.exact import ExactBackend
 from exactgrasp.backends.exact.gradients import object_twist, volume_moments
+from exactgrasp.backends.registry import as_backend
+from exactgrasp.backends.voxel import VoxelBackend
 from exactgrasp.errors import BackendError, Fix, MeshError
-from exactgrasp.geometry.intake import UNITS, unit_scale
+from exactgrasp.geometry.intake import REPAIR, UNITS, unit_scale
 from exactgrasp.geometry.solid import Solid
 
 __all__ = ["Overlap", "as_solid", "intersection", "intersection_gradient", "intersection_volume"]
@@ -31,7 +31,6 @@ ACCEPTED = (
     "a trimesh.Trimesh, an exactgrasp.Solid, a (vertices (n, 3), faces (m, 3)) pair, or the "
     "path of a mesh file (STL, OBJ, PLY, OFF, GLB)"
 )
-BROADPHASES = ("auto", "coal", "fcl", None)
 UNIT_NAMES = sorted(set(UNITS) - {"in"})
 
 
@@ -40,7 +39,7 @@ def as_solid(
     name: str = "mesh",
     *,
     units: str = "m",
-    repair: bool = False,
+    repair: bool = REPAIR,
     check_scale: bool = True,
 ) -> Solid:
     """One closed mesh, in any accepted form, as a validated `Solid` (metres).
@@ -123,33 +122,22 @@ def _units_pair(units: Any) -> tuple[str, str]:
     return pair[0], pair[1]
 
 
-def _broadphase(broadphase: Any, n_poses: int) -> str | None:
-    """The broad phase to build with: ``"auto"`` is coal where it is installed and the stack
-    holds more than `defaults.OVERLAP_AUTO_BVH_POSES` poses, else None."""
-    if broadphase not in BROADPHASES:
-        raise BackendError(
-            f"broadphase={broadphase!r}; use 'auto', 'coal', 'fcl' or None (results do not "
-            "depend on it)."
-        )
-    if broadphase == "auto":
-        many = n_poses > defaults.OVERLAP_AUTO_BVH_POSES
-        return "coal" if many and importlib.util.find_spec("coal") is not None else None
-    return broadphase
-
-
-def _check_backend(backend: Any) -> None:
-    if backend == "exact":
-        return
-    if backend == "voxel":
+def _exact_backend(backend: Any) -> ExactBackend:
+    """``backend`` as an `ExactBackend` (a name means the library defaults), or a
+    `BackendError` saying why another one does not apply."""
+    if isinstance(backend, VoxelBackend) or backend == "voxel":
         raise BackendError(
             "backend='voxel' is not offered by intersection_volume: the voxel backend is the "
             "paper's estimator of a hand in its palm frame (grids sized to the hand's canonical "
             "units, surface weights of the paper), which two arbitrary meshes do not have; use "
-            "backend='exact' (the default)."
+            "backend='exact' (the default) or backend=ExactBackend(...)."
         )
-    raise BackendError(
-        f"backend={backend!r}; intersection_volume computes with backend='exact' only."
-    )
+    if backend != "exact" and not isinstance(backend, ExactBackend):
+        raise BackendError(
+            f"backend={backend!r}; intersection_volume computes with backend='exact' or "
+            "backend=ExactBackend(...) only."
+        )
+    return as_backend(backend)
 
 
 @dataclass(frozen=True)
@@ -168,28 +156,26 @@ class Overlap:
     bounds: Any
 
 
-def _setup(a, b, poses, units, repair, check_scale, broadphase, n_jobs):
+def _setup(a, b, poses, backend, units, repair, check_scale):
     """The checked inputs of `intersection_volume` and `intersection_gradient`: (whether one
     pose was given, the poses (..., 4, 4), the intersector or None for no poses)."""
+    backend = _exact_backend(backend)
     units_a, units_b = _units_pair(units)
     if not isinstance(repair, bool | np.bool_):
         raise MeshError(f"repair must be True or False, got {repair!r}.")
     single = poses is None
     arr = check_poses(np.eye(4) if single else poses, name="poses")
     single = single or arr.ndim == 2
-    library = _broadphase(broadphase, arr.size // 16)
     A = as_solid(a, "a", units=units_a, repair=bool(repair), check_scale=check_scale)
     B = as_solid(b, "b", units=units_b, repair=bool(repair), check_scale=check_scale)
     if arr.size == 0:
         return single, arr, None
-    intersector = ExactIntersector(
-        [(A.vertices, A.faces)], [(B.vertices, B.faces)], broadphase=library, n_jobs=n_jobs
-    )
+    intersector = backend.intersector_of([(A.vertices, A.faces)], [(B.vertices, B.faces)])
     return single, arr, intersector
 
 
 def intersection_volume(
-    a: Any, b: Any, poses: Any = None, backend: str = "exact", **options: Any
+    a: Any, b: Any, poses: Any = None, backend: str | ExactBackend = "exact", **options: Any
 ) -> Any:
     """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3: `intersection`'s
     volumes alone.
@@ -199,8 +185,7 @@ def intersection_volume(
     a, b, poses, backend
         As `intersection`.
     **options
-        `intersection`'s keyword options (``units``, ``repair``, ``check_scale``,
-        ``broadphase``, ``n_jobs``).
+        `intersection`'s keyword options (``units``, ``repair``, ``check_scale``).
 
     Returns
     -------
@@ -215,13 +200,11 @@ def intersection(
     a: Any,
     b: Any,
     poses: Any = None,
-    backend: str = "exact",
+    backend: str | ExactBackend = "exact",
     *,
     units: str | tuple[str, str] = "m",
-    repair: bool = False,
+    repair: bool = REPAIR,
     check_scale: bool = True,
-    broadphase: str | None = defaults.OVERLAP_BROADPHASE,
-    n_jobs: int = defaults.OVERLAP_N_JOBS,
 ) -> Overlap:
     """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3, with its bound.
 
@@ -239,8 +222,11 @@ def intersection(
     poses : array_like, shape (4, 4) or (..., 4, 4), optional
         Rigid motions of ``b`` in ``a``'s frame: a vertex ``x`` of ``b`` (metres, after the
         unit conversion) moves to ``R @ x + t``, ``t`` in metres. None: ``b`` as given.
-    backend : {"exact"}
-        Only the exact backend applies to two arbitrary meshes; ``"voxel"`` is refused.
+    backend : "exact" or ExactBackend
+        Only the exact backend applies to two arbitrary meshes; ``"voxel"`` is refused. The
+        name means its library defaults (`exactgrasp.backends.defaults`); an instance sets
+        the broad phase and the threads, e.g. ``ExactBackend(broadphase=None, n_jobs=1)``.
+        The volumes do not depend on either.
     units : {"m", "cm", "mm", "inch"} or (str, str)
         Unit of the meshes' coordinates: one for both, or (units of a, units of b). Not
         applied to `Solid` inputs (already in metres).
@@ -248,14 +234,6 @@ def intersection(
         Let trimesh and pymeshfix close and orient both meshes, with a warning.
     check_scale : bool
         Refuse a mesh longer than 5 m after the unit conversion (see `Solid`).
-    broadphase : {"auto", "coal", "fcl", None}
-        Library that skips poses whose surfaces are apart; ``"auto"`` (default): coal where
-        installed, for stacks of more than `defaults.OVERLAP_AUTO_BVH_POSES` poses (its BVH
-        takes longer to build than it saves on fewer). The volumes do not depend on it.
-    n_jobs : int
-        Threads over poses (-1: every core; default `defaults.OVERLAP_N_JOBS`). The volumes
-        do not depend on it.
-
     Returns
     -------
     Overlap
@@ -269,11 +247,10 @@ def intersection(
         A mesh in a form not accepted or not a closed solid (the message names ``a`` or
         ``b``), or unknown ``units``.
     BackendError
-        A pose that is not a rigid motion (the message names ``poses`` and its index), an
-        unknown ``backend`` or ``broadphase``, a bad ``n_jobs``.
+        A pose that is not a rigid motion (the message names ``poses`` and its index), a
+        ``backend`` other than the exact one.
     """
-    _check_backend(backend)
-    single, arr, intersector = _setup(a, b, poses, units, repair, check_scale, broadphase, n_jobs)
+    single, arr, intersector = _setup(a, b, poses, backend, units, repair, check_scale)
     if intersector is None:
         empty = np.zeros(arr.shape[:-2])
         return Overlap(empty, empty.copy())
@@ -288,12 +265,11 @@ def intersection_gradient(
     a: Any,
     b: Any,
     poses: Any = None,
+    backend: str | ExactBackend = "exact",
     *,
     units: str | tuple[str, str] = "m",
-    repair: bool = False,
+    repair: bool = REPAIR,
     check_scale: bool = True,
-    broadphase: str | None = defaults.OVERLAP_BROADPHASE,
-    n_jobs: int = defaults.OVERLAP_N_JOBS,
 ) -> np.ndarray:
     """Derivative of the exact volume of ``a`` ∩ ``b`` by a rigid motion of ``b``.
 
@@ -311,8 +287,8 @@ def intersection_gradient(
 
     Parameters
     ----------
-    a, b, poses, units, repair, check_scale, broadphase, n_jobs
-        As for `intersection_volume`.
+    a, b, poses, backend, units, repair, check_scale
+        As for `intersection`.
 
     Returns
     -------
@@ -325,7 +301,7 @@ def intersection_gradient(
     MeshError, BackendError
         As for `intersection_volume`.
     """
-    single, arr, intersector = _setup(a, b, poses, units, repair, check_scale, broadphase, n_jobs)
+    single, arr, intersector = _setup(a, b, poses, backend, units, repair, check_scale)
     if intersector is None:
         return np.zeros((*arr.shape[:-2], 6))
     _, links = volume_moments(intersector, arr)

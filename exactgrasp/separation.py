@@ -20,9 +20,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from exactgrasp.backends.exact import ExactBackend
+from exactgrasp.backends.registry import as_backend
 from exactgrasp.errors import SeparationError
 from exactgrasp.geometry.se3 import exp_se3
-from exactgrasp.grasp.closing import close_fingers, closing_directions
+from exactgrasp.grasp.closing import close_fingers_result, closing_directions
 from exactgrasp.grasp.grasp import Grasp
 
 __all__ = ["PUSH_MM", "ROTATION_SCALE", "Separation", "in_contact", "separate"]
@@ -109,11 +110,21 @@ def _bracket(backend, grasp, pose, xi, tol) -> float:
     return hi
 
 
-def in_contact(grasp: Grasp, direction: np.ndarray, backend: ExactBackend | None = None) -> bool:
+def _exact_backend(backend: str | ExactBackend) -> ExactBackend:
+    """``backend`` as an `ExactBackend` (a name means the library defaults)."""
+    if backend != "exact" and not isinstance(backend, ExactBackend):
+        raise SeparationError(
+            f"backend={backend!r}; separation follows the exact volume's gradient: use "
+            "backend='exact' (the default) or backend=ExactBackend(...)."
+        )
+    return as_backend(backend)
+
+
+def in_contact(grasp: Grasp, direction: np.ndarray, backend: str | ExactBackend = "exact") -> bool:
     """Whether the grasp is in contact: its exact volume reads 0, and moving the object
     `PUSH_MM` back along ``direction`` (a twist, canonical frame, separating sense)
     penetrates."""
-    backend = backend or ExactBackend()
+    backend = _exact_backend(backend)
     if _volumes(backend, grasp, np.eye(4)[None])[0] != 0:
         return False
     push = PUSH_MM * 1e-3 * grasp.frame.scale * direction / _norm(direction)
@@ -138,7 +149,7 @@ def separate(
     rotation: bool = True,
     tolerance_mm: float = 0.01,
     max_steps: int = 60,
-    backend: ExactBackend | None = None,
+    backend: str | ExactBackend = "exact",
 ) -> Separation:
     """Move the object out of the hand by the smallest rigid motion the exact volume's
     gradient finds, leaving it in contact.
@@ -156,8 +167,9 @@ def separate(
         Largest gap (mm, along the separating direction) left between hand and object.
     max_steps : int
         Gradient steps before giving up.
-    backend : ExactBackend, optional
-        Default: ``ExactBackend()`` with the library's defaults.
+    backend : "exact" or ExactBackend
+        The name means the library defaults; an instance sets the broad phase and threads,
+        e.g. ``ExactBackend(n_jobs=1)``. The result does not depend on either.
 
     Returns
     -------
@@ -176,7 +188,7 @@ def separate(
         raise SeparationError(
             f"tolerance_mm={tolerance_mm!r}; use a gap in mm above 0 and below {PUSH_MM}."
         )
-    backend = backend or ExactBackend()
+    backend = _exact_backend(backend)
     scale = grasp.frame.scale
     start = backend.volume_gradients(grasp, np.eye(4)[None])
     before = float(start.volumes[0]) / scale**3
@@ -250,7 +262,7 @@ def _finish(grasp, work, pose, fingers, before, steps, direction, backend) -> Se
         # a hair (its warning is this function's business: the motion reports it).
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            closed = close_fingers(hand, grasp.object, new_pose, backoff=True, full_output=True)
+            closed = close_fingers_result(hand, grasp.object, new_pose, backoff=True)
         hand, new_pose = closed.hand, closed.object_pose
         motion = new_pose @ np.linalg.inv(grasp.object_pose)
     out = Grasp(hand, grasp.object, new_pose, name=grasp.name)

@@ -461,3 +461,113 @@ def test_docstrings_do_not_list_imports_by_hand(module):
     docstring = ast.get_docstring(ast.parse(MODULES[module].read_text())) or ""
     match = IMPORT_LIST.search(docstring)
     assert not match, f"{module}'s docstring lists its imports: {match.group(0).strip()} ..."
+
+
+# -- one spelling, one check ----------------------------------------------------------------
+
+
+def functions(module: str) -> list[ast.FunctionDef | ast.AsyncFunctionDef]:
+    tree = ast.parse(MODULES[module].read_text())
+    return [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)]
+
+
+def parameter_names(function: ast.FunctionDef | ast.AsyncFunctionDef) -> list[str]:
+    args = function.args
+    return [a.arg for a in (*args.posonlyargs, *args.args, *args.kwonlyargs)]
+
+
+#: Backend parameter names that also mean something else: a bootstrap's seed, an object's
+#: surface samples, a figure's grid.
+SHARED_NAMES = {"seed", "surface_samples", "grid"}
+
+
+def backend_option_names() -> set[str]:
+    """Every constructor parameter of the built-in backends, but `SHARED_NAMES`."""
+    from exactgrasp.backends.exact.options import PARAMETERS
+    from exactgrasp.backends.voxel.backend import VoxelBackend
+
+    return (set(PARAMETERS) | set(VoxelBackend.parameter_constraints)) - SHARED_NAMES
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_a_backend_is_configured_only_by_its_instance(module):
+    """``backend=`` is a registered name or a configured instance everywhere: no function
+    takes ``backend_params``, and outside the backends no function takes a backend's own
+    option (``broadphase=``, ``n_jobs=``, ``object_resolution=``, ...)."""
+    options = backend_option_names()
+    found = []
+    for function in functions(module):
+        names = parameter_names(function)
+        kwarg = function.args.kwarg.arg if function.args.kwarg else None
+        if "backend_params" in (*names, kwarg):
+            found.append(f"{function.name}: backend_params")
+        if room(module) == "backends":
+            continue
+        if set(names) & options:
+            found.append(f"{function.name}: {sorted(set(names) & options)}")
+    assert not found, f"{module}: {found}"
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_no_flag_changes_a_return_type(module):
+    """One return type per function: a richer result is another function
+    (`close_fingers_result` beside `close_fingers`), not a ``full_output=`` or ``return_*=``
+    flag."""
+    flags = [
+        f"{function.name}({name}=...)"
+        for function in functions(module)
+        for name in parameter_names(function)
+        if name == "full_output" or name.startswith("return_")
+    ]
+    assert not flags, f"{module}: {flags}"
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_repair_has_one_default(module):
+    """Every ``repair`` option defaults to `exactgrasp.geometry.intake.REPAIR` (or None: "as
+    the file says"), never to a literal of its own."""
+    found = []
+    for function in functions(module):
+        args = function.args
+        positional = [*args.posonlyargs, *args.args]
+        with_default = positional[len(positional) - len(args.defaults) :]
+        pairs = list(zip(with_default, args.defaults, strict=True))
+        pairs += [
+            (a, d) for a, d in zip(args.kwonlyargs, args.kw_defaults, strict=True) if d is not None
+        ]
+        for arg, default in pairs:
+            if (
+                arg.arg == "repair"
+                and isinstance(default, ast.Constant)
+                and default.value is not None
+            ):
+                found.append(f"{function.name}(repair={default.value!r})")
+    assert not found, f"{module}: {found}"
+
+
+#: The public entries that check poses (`exactgrasp.backends.base.check_poses`); what they call
+#: takes checked poses and does not check them again.
+POSE_CHECKERS = {
+    "exactgrasp.backends",
+    "exactgrasp.backends.base",
+    "exactgrasp.backends.exact.backend",
+    "exactgrasp.backends.exact.gradients",  # the boolean reference of the moments only
+    "exactgrasp.backends.exact.reference",
+    "exactgrasp.backends.voxel.backend",
+    "exactgrasp.backends.voxel.kernel",  # `estimate_*`; the `*_of_checked` functions trust
+    "exactgrasp.overlap",
+    "exactgrasp.cli.overlap",
+}
+
+
+def test_poses_are_checked_at_the_public_entries_only():
+    checking = {
+        module
+        for module, path in MODULES.items()
+        if any(
+            isinstance(node, ast.Name) and node.id == "check_poses"
+            for node in ast.walk(ast.parse(path.read_text()))
+        )
+    }
+    assert checking <= POSE_CHECKERS, sorted(checking - POSE_CHECKERS)
+    assert "exactgrasp.backends.exact.intersector" not in checking

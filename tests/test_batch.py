@@ -25,6 +25,7 @@ pytest.importorskip("pyarrow")
 
 import exactgrasp as eg
 from exactgrasp import hands, objects
+from exactgrasp.backends.voxel import VoxelBackend
 from exactgrasp.batch import BatchError, read_batch, read_manifest, run_batch
 from exactgrasp.batch.store import run_lock
 from exactgrasp.cli import main
@@ -52,7 +53,7 @@ def _run(manifest: Path, out: Path, workers: int | None, **kwargs):
         manifest,
         out,
         sampler=SAMPLER,
-        backend_params=BACKEND_PARAMS,
+        backend=VoxelBackend(**BACKEND_PARAMS),
         workers=workers,
         part_size=PART_SIZE,
         **kwargs,
@@ -115,7 +116,7 @@ def test_two_worker_local_cluster(run_two, manifest):
     assert all("seconds" not in m for m in metadata)
     # The batch value is the library's value for the same grasp, bit for bit.
     grasp = eg.Grasp.from_file(manifest.parent / "grasps" / "g3.json")
-    direct = eg.compute_descriptor(grasp, SAMPLER, "voxel", **BACKEND_PARAMS)
+    direct = eg.compute_descriptor(grasp, SAMPLER, VoxelBackend(**BACKEND_PARAMS))
     np.testing.assert_array_equal(values[GOOD.index("g3")], direct.values)
     assert values.max() > 0
 
@@ -303,14 +304,19 @@ def test_resume_with_other_parameters_is_refused(manifest, run_one, tmp_path):
             out,
             sampler=eg.PathSampler(2, 1, 2, n_steps=3),
             workers=0,
-            backend_params=BACKEND_PARAMS,
+            backend=VoxelBackend(**BACKEND_PARAMS),
             part_size=PART_SIZE,
         )
     with pytest.raises(BatchError, match="backend_params"):
         run_batch(manifest, out, sampler=SAMPLER, workers=0, part_size=PART_SIZE)
     with pytest.raises(BatchError, match="part_size"):
         run_batch(
-            manifest, out, sampler=SAMPLER, backend_params=BACKEND_PARAMS, part_size=3, workers=0
+            manifest,
+            out,
+            sampler=SAMPLER,
+            backend=VoxelBackend(**BACKEND_PARAMS),
+            part_size=3,
+            workers=0,
         )
     with run_lock(out), pytest.raises(BatchError, match="in use"):
         _run(manifest, out, workers=0)
@@ -322,9 +328,7 @@ def test_workers_with_other_code_fail_their_rows(manifest):
 
     rows = read_manifest(manifest).rows[:2]
     expected = [eg.__version__, {"object_resolution": 1}]
-    outcome = compute_rows(
-        rows, str(manifest.parent), ("voxel", {}), SAMPLER.params, None, expected
-    )
+    outcome = compute_rows(rows, str(manifest.parent), "voxel", SAMPLER.params, None, expected)
     assert [r["error"] for r in outcome["results"]] == ["BatchError", "BatchError"]
     assert "install the same exactgrasp" in outcome["results"][0]["message"]
     assert all(r["values"] is None for r in outcome["results"])
@@ -350,7 +354,7 @@ def test_units_and_repair_override_the_grasp_files(tmp_path):
     with pytest.warns(UserWarning, match="repaired"):
         grasp = eg.Grasp.from_file(tmp_path / "g.json", units="mm", repair=True)
     assert grasp.object.volume == pytest.approx(0.06 * 0.1 * 0.1, rel=1e-9)
-    expected = eg.compute_descriptor(grasp, SAMPLER, **BACKEND_PARAMS).values
+    expected = eg.compute_descriptor(grasp, SAMPLER, VoxelBackend(**BACKEND_PARAMS)).values
     np.testing.assert_allclose(np.asarray(values[0]).reshape(expected.shape), expected, rtol=1e-6)
     with pytest.raises(BatchError, match="units must be one of"):
         _run(manifest, tmp_path / "bad", workers=0, units="furlong")

@@ -114,7 +114,7 @@ def test_each_hand_is_prepared_once_per_process(tmp_path):
         rows.append(ManifestRow(len(rows), f"p{i}", f"p{i}.json"))
     LINK_SOLIDS.clear()
     builds, hits = LINK_SOLIDS.builds, LINK_SOLIDS.hits
-    first = compute_rows(rows, str(tmp_path), ("voxel", {}), SAMPLER.params)
+    first = compute_rows(rows, str(tmp_path), "voxel", SAMPLER.params)
     assert [r["error"] for r in first["results"]] == [None] * 6
     assert first["links_prepared"] == 4 + 1
     assert LINK_SOLIDS.builds - builds == 4 + 1
@@ -122,7 +122,7 @@ def test_each_hand_is_prepared_once_per_process(tmp_path):
     # takes its volume from the voxel backend's cache of hand volumes without a lookup.
     assert LINK_SOLIDS.hits - hits == 4 * 9 - 4
     # The same hands again (new Hand objects, read from the files again): nothing prepared.
-    again = compute_rows(rows, str(tmp_path), ("voxel", {}), SAMPLER.params)
+    again = compute_rows(rows, str(tmp_path), "voxel", SAMPLER.params)
     assert again["links_prepared"] == 0
     assert [r["values"].tolist() for r in again["results"]] == [
         r["values"].tolist() for r in first["results"]
@@ -169,9 +169,9 @@ def _cpu_of_the_rows(manifest: str, limited: bool = True) -> dict:
         return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
     m = read_manifest(manifest)
-    worker.compute_rows(m.rows[:1], str(m.base_dir), ("exact", {}), SAMPLER.params)
+    worker.compute_rows(m.rows[:1], str(m.base_dir), "exact", SAMPLER.params)
     before = time.process_time() - main_cpu()
-    outcome = worker.compute_rows(m.rows[1:], str(m.base_dir), ("exact", {}), SAMPLER.params)
+    outcome = worker.compute_rows(m.rows[1:], str(m.base_dir), "exact", SAMPLER.params)
     assert [r["error"] for r in outcome["results"]] == [None] * (len(m.rows) - 1)
     rows = time.process_time() - main_cpu() - before
     return {"threads": rows / outcome["thread_cpu_seconds"], "outcome": outcome}

@@ -21,6 +21,7 @@ import exactgrasp as eg
 from exactgrasp.backends import registry
 from exactgrasp.backends.params import Interval, Options, Param
 from exactgrasp.backends.registry import backend_class
+from exactgrasp.backends.voxel import VoxelBackend
 from exactgrasp.cli import build_parser, main
 from exactgrasp.cli import descriptor as descriptor_command
 from exactgrasp.cli.common import sampler_from_args
@@ -89,8 +90,7 @@ def test_descriptor_and_compare_commands(grasp_file, tmp_path, capsys):
     api = eg.compute_descriptor(
         eg.Grasp.from_file(grasp_file),
         eg.PathSampler.preset("balanced", n_steps=3),
-        backend="voxel",
-        object_resolution=20,
+        backend=VoxelBackend(object_resolution=20),
     )
     assert np.array_equal(api.values, d.values)
     assert d.values.max() > 0
@@ -358,8 +358,7 @@ def test_compare_routes_params_per_backend(grasp_file, tmp_path):
     api = eg.compute_descriptor(
         eg.Grasp.from_file(grasp_file),
         eg.PathSampler(2, 1, 1, n_steps=2),
-        object_resolution=12,
-        hand_resolution=24,
+        backend=VoxelBackend(object_resolution=12, hand_resolution=24),
     )
     np.testing.assert_allclose(voxel, api.values.ravel(), rtol=1e-12)
 
@@ -400,8 +399,7 @@ def test_units_override_the_grasp_file(tmp_path, capsys):
     api = eg.compute_descriptor(
         eg.Grasp.from_file(right),
         eg.PathSampler(2, 1, 1, n_steps=2),
-        object_resolution=12,
-        hand_resolution=24,
+        backend=VoxelBackend(object_resolution=12, hand_resolution=24),
     )
     np.testing.assert_array_equal(eg.Descriptor.load(out).values, api.values)
     assert (
@@ -445,11 +443,8 @@ def test_close_command_writes_the_closed_grasp(barrett_box_file, tmp_path, capsy
     text = capsys.readouterr().out
     assert "box: 3 of 3 fingers touch the object (coal)" in text
     closed = eg.Grasp.from_file(out)
-    api = eg.close_fingers(
-        eg.Grasp.from_file(barrett_box_file).hand,
-        closed.object,
-        closed.object_pose,
-        full_output=True,
+    api = eg.close_fingers_result(
+        eg.Grasp.from_file(barrett_box_file).hand, closed.object, closed.object_pose
     )
     for finger, result in enumerate(api.fingers, start=1):
         med, dist = result.joints
@@ -499,7 +494,7 @@ def test_close_command_backs_off_a_penetrating_object(tmp_path, capsys):
     assert main(argv) == 0
     captured = capsys.readouterr()
     assert re.search(r"\(coal; the object moved 11\.4\d\d mm out along the palm", captured.out)
-    assert "full_output" not in captured.err
+    assert "close_fingers_result" not in captured.err
     closed = eg.Grasp.from_file(tmp_path / "c.json")
     assert closed.object_pose[2, 3] == pytest.approx(pose[2, 3] + 0.01144, abs=1e-4)
     err = _error(capsys, [*argv, "--no-backoff"])

@@ -14,7 +14,7 @@ pytest.importorskip("coal", reason="close_fingers' default engine (coal) is not 
 import exactgrasp as eg
 from exactgrasp.errors import JointError
 from exactgrasp.geometry.manifold import to_manifold, union
-from exactgrasp.grasp.closing import ClosingError, close_fingers, close_grasp
+from exactgrasp.grasp.closing import ClosingError, close_fingers, close_fingers_result, close_grasp
 
 TOL = 1e-4
 FLEXION = [f"finger_{i}_{part}_joint" for i in (1, 2, 3) for part in ("med", "dist")]
@@ -71,7 +71,7 @@ def test_builtin_hand_closes_onto_cylinder(cylinder_grasp, engine):
     if engine == "fcl":
         pytest.importorskip("fcl", reason="python-fcl is not installed")
     hand, obj, pose = cylinder_grasp
-    result = close_fingers(hand, obj, pose, engine=engine, full_output=True)
+    result = close_fingers_result(hand, obj, pose, engine=engine)
     assert result.backoff_distance == 0.0
     np.testing.assert_array_equal(result.object_pose, pose)
     assert [f.joints for f in result.fingers] == [tuple(FLEXION[k : k + 2]) for k in (0, 2, 4)]
@@ -98,7 +98,7 @@ def test_engines_agree_and_hand_returned(cylinder_grasp):
 def test_coupled_distals_close_through_their_medials(cylinder_grasp):
     _, obj, pose = cylinder_grasp
     hand = eg.hands.barrett(distal_coupling=True)
-    result = close_fingers(hand, obj, pose, full_output=True)
+    result = close_fingers_result(hand, obj, pose)
     assert [f.joints for f in result.fingers] == [(f"finger_{i}_med_joint",) for i in (1, 2, 3)]
     _check_contact_grasp(result, obj)
 
@@ -109,7 +109,7 @@ def test_breakaway_medial_stops_distal_keeps_closing():
     bar = eg.objects.box((0.06, 0.01, 0.01))
     pose = np.eye(4)
     pose[:3, 3] = [0.0, 0.09, 0.105]
-    result = close_fingers(hand, bar, pose, full_output=True)
+    result = close_fingers_result(hand, bar, pose)
     finger_3 = result.fingers[2]
     assert finger_3.contact_links[0] == "finger_3_med"
     joints = result.hand.joints
@@ -122,7 +122,7 @@ def test_breakaway_medial_stops_distal_keeps_closing():
 def test_real_barrett_cereal_box_reopened_and_closed(shared_data):
     grasp = eg.Grasp.from_file(shared_data / "barrett-grasps" / "grasps" / f"{CEREAL}.json")
     opened = grasp.hand.with_joints(dict.fromkeys(FLEXION, 0.0))
-    result = close_fingers(opened, grasp.object, grasp.object_pose, full_output=True)
+    result = close_fingers_result(opened, grasp.object, grasp.object_pose)
     assert result.backoff_distance == 0.0
     assert [f.contact_links for f in result.fingers] == [(f"finger_{i}_dist",) for i in (1, 2, 3)]
     _check_contact_grasp(result, grasp.object)
@@ -183,7 +183,7 @@ def test_penetrating_palm_without_backoff(cylinder_grasp):
         close_fingers(hand, obj, sunk, backoff=False)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        result = close_fingers(hand, obj, sunk, full_output=True)
+        result = close_fingers_result(hand, obj, sunk)
     assert result.backoff_distance == pytest.approx(0.0874 - 0.076, abs=2e-4)
     _check_contact_grasp(result, obj)
 
@@ -260,7 +260,7 @@ def test_model_closing_joints_attribute_is_the_default(cylinder_grasp):
     _, obj, pose = cylinder_grasp
     model = load_model("two_fingers.xml", xml=BARRETT_MJCF, palm=BARRETT_PALM)
     model.closing_joints = ("finger_1_med_joint", "finger_3_med_joint")
-    result = close_fingers(eg.Hand(model), obj, pose, full_output=True)
+    result = close_fingers_result(eg.Hand(model), obj, pose)
     assert [f.joints for f in result.fingers] == [("finger_1_med_joint",), ("finger_3_med_joint",)]
     assert result.hand.joints["finger_2_med_joint"] == 0.0
 
@@ -275,7 +275,7 @@ def test_parallel_gripper_closes_towards_its_lower_limit():
     box = eg.objects.box((0.03, width, 0.04))
     pose = np.eye(4)
     pose[2, 3] = 0.025
-    result = close_fingers(hand, box, pose, full_output=True)
+    result = close_fingers_result(hand, box, pose)
     assert result.backoff_distance == 0.0
     np.testing.assert_array_equal(result.object_pose, pose)
     assert result.directions == {"finger_1_joint": -1}
@@ -288,7 +288,7 @@ def test_parallel_gripper_closes_towards_its_lower_limit():
     # Closing towards the upper limit (the old fixed rule) starts shut inside the box: the
     # object is backed off out of the jaws, and the jaws touch it only with their tips.
     with pytest.warns(UserWarning, match="penetrates box"):
-        wrong = close_fingers(hand, box, pose, direction={"finger_1_joint": +1}, full_output=True)
+        wrong = close_fingers_result(hand, box, pose, direction={"finger_1_joint": +1})
     assert wrong.backoff_distance > 0.04 and wrong.hand.joints["finger_1_joint"] == 0.0
 
 
@@ -327,7 +327,7 @@ def mixed_grasp():
 def test_mixed_directions_inferred(mixed_grasp):
     hand, box, pose = mixed_grasp
     assert eg.grasp.closing.closing_directions(hand) == {"a_joint": 1, "b_joint": -1}
-    result = close_fingers(hand, box, pose, full_output=True)
+    result = close_fingers_result(hand, box, pose)
     assert result.directions == {"a_joint": 1, "b_joint": -1}
     assert all(f.inferred == (True,) for f in result.fingers)
     assert [f.contact_links for f in result.fingers] == [("a",), ("b",)]
@@ -339,9 +339,7 @@ def test_mixed_directions_inferred(mixed_grasp):
 def test_mixed_directions_given(mixed_grasp):
     hand, box, pose = mixed_grasp
     inferred = close_fingers(hand, box, pose)
-    given = close_fingers(
-        hand, box, pose, direction={"a_joint": 1, "b_joint": -1}, full_output=True
-    )
+    given = close_fingers_result(hand, box, pose, direction={"a_joint": 1, "b_joint": -1})
     assert given.hand.joints == inferred.joints
     assert all(f.inferred == (False,) for f in given.fingers)
 
@@ -353,7 +351,7 @@ def test_model_closing_directions_attribute(mixed_grasp):
     palm = {"site": "face", "normal": "+z", "up": "+y", "depth": 0.06}
     model = load_model("mixed_preset.xml", xml=MIXED, palm=palm)
     model.closing_directions = {"b_joint": -1}
-    result = close_fingers(eg.Hand(model), box, pose, full_output=True)
+    result = close_fingers_result(eg.Hand(model), box, pose)
     assert [f.inferred for f in result.fingers] == [(True,), (False,)]
 
 

@@ -39,7 +39,7 @@ def _shift_backend():
 
 def test_descriptor_values_are_volume_over_hand_volume(grasp):
     sampler = eg.PathSampler(3, 2, 2, n_steps=4)
-    d = eg.compute_descriptor(grasp, sampler, backend="shift", scale=2.0)
+    d = eg.compute_descriptor(grasp, sampler, backend=ShiftBackend(scale=2.0))
     expected = 2.0 * sampler.poses()[..., 0, 3] ** 2 / grasp.canonical_hand_volume
     # A pose equal to an earlier one to rounding takes that one's value.
     np.testing.assert_allclose(d.values, expected, rtol=1e-12, atol=1e-28)

@@ -48,7 +48,7 @@ def describe(grasp: eg.Grasp, backend: str = "voxel"):
     params = PARAMS if backend == "voxel" else {}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        d = eg.compute_descriptor(grasp, SAMPLER, backend, **params)
+        d = eg.compute_descriptor(grasp, SAMPLER, eg.get_backend(backend, **params))
     return d, caught
 
 
@@ -56,7 +56,7 @@ def test_a_box_on_the_palm_warns_nothing():
     grasp = box_grasp(PALM_TOP, name="on the palm")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        d = eg.compute_descriptor(grasp, SAMPLER, "voxel", **PARAMS)
+        d = eg.compute_descriptor(grasp, SAMPLER, eg.get_backend("voxel", **PARAMS))
     meta = d.metadata
     assert all(key in meta for key in KEYS)
     assert meta["warnings"] == []
@@ -246,7 +246,11 @@ def test_run_batch_keeps_third_party_warnings_and_passes_ours(tmp_path, noisy_vo
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         summary = eg.run_batch(
-            manifest, tmp_path / "out", sampler=SAMPLER, backend_params=PARAMS, workers=0
+            manifest,
+            tmp_path / "out",
+            sampler=SAMPLER,
+            backend=eg.get_backend("voxel", **PARAMS),
+            workers=0,
         )
     assert summary.done == 2
     messages = [str(w.message) for w in caught]
@@ -280,7 +284,8 @@ import exactgrasp as eg
 if __name__ == "__main__":
     params = json.loads(sys.argv[3])
     summary = eg.run_batch(sys.argv[1], sys.argv[2], sampler=params["sampler"],
-                           backend_params=params["backend"], workers=1)
+                           backend=eg.get_backend("voxel", **params["backend"]),
+                           workers=1)
     print(summary.text())
     sys.exit(summary.exit_status)
 """

@@ -223,3 +223,8 @@ def test_object_pose_noise_statistics():
     assert np.array_equal(again, eg.object_pose_noise(grasp, 0.025, 32, rng=7))
     with pytest.raises(ValueError, match="delta must be positive"):
         eg.object_pose_noise(grasp, 0.01, 0, rng=1)
+
+
+def test_a_link_that_is_no_mesh_is_a_mesh_error():
+    with pytest.raises(eg.MeshError, match="link link0: expected a trimesh.Trimesh"):
+        eg.Hand.from_meshes([42], frame=eg.HandFrame.identity())

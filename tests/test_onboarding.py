@@ -170,10 +170,9 @@ def test_read_batch_gives_what_pairwise_distances_takes(tmp_path):
         grasp.save(tmp_path / f"g{i}.json")
         rows.append(json.dumps({"id": f"g{i}", "grasp": f"g{i}.json"}) + "\n")
     (tmp_path / "manifest.jsonl").write_text("".join(rows))
-    eg.run_batch(
-        tmp_path / "manifest.jsonl", tmp_path / "out", sampler=sampler, backend_params=params,
-        workers=0,
-    )  # fmt: skip
+    backend = eg.get_backend("voxel", **params)
+    eg.run_batch(tmp_path / "manifest.jsonl", tmp_path / "out", sampler=sampler, backend=backend,
+                 workers=0)  # fmt: skip
     ids, descriptors, metadata = eg.read_batch(tmp_path / "out")
     assert ids == ["g0", "g1", "g2"]
     distances = eg.pairwise_distances(descriptors)
@@ -185,7 +184,7 @@ def test_read_batch_gives_what_pairwise_distances_takes(tmp_path):
     np.testing.assert_array_equal(batch.values[1], descriptors[1].values)
     assert descriptors[1].metadata == metadata[1] and "seconds" not in metadata[1]
     assert descriptors[0].sampler.params == sampler.params
-    direct = eg.compute_descriptor(eg.Grasp.from_file(tmp_path / "g2.json"), sampler, **params)
+    direct = eg.compute_descriptor(eg.Grasp.from_file(tmp_path / "g2.json"), sampler, backend)
     np.testing.assert_array_equal(descriptors[2].values, direct.values)
 
 

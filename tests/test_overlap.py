@@ -12,6 +12,8 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 import exactgrasp as eg
+from exactgrasp.backends.exact import ExactBackend
+from exactgrasp.backends.voxel import VoxelBackend
 from exactgrasp.cli.main import main
 from exactgrasp.errors import BackendError, MeshError
 from exactgrasp.geometry import primitives
@@ -246,24 +248,27 @@ def test_bad_options_are_refused_by_name():
         intersection_volume(closed, closed, units="km")
     with pytest.raises(MeshError, match=r"units=\('m',\)"):
         intersection_volume(closed, closed, units=("m",))
-    with pytest.raises(BackendError, match=r"broadphase='bvh'"):
-        intersection_volume(closed, closed, broadphase="bvh")
+    with pytest.raises(BackendError, match=r"backend='voxel' is not offered"):
+        intersection_volume(closed, closed, backend=VoxelBackend())
+    with pytest.raises(TypeError, match="broadphase"):  # set on the backend: ExactBackend(...)
+        intersection_volume(closed, closed, broadphase="coal")
     with pytest.raises(MeshError, match=r"repair must be True or False"):
         intersection_volume(closed, closed, repair="yes")
 
 
 @pytest.mark.parametrize(
-    "options", [{"broadphase": "coal"}, {"broadphase": "fcl"}, {"n_jobs": 2}, {}], ids=str
+    "options", [{"broadphase": "coal"}, {"broadphase": "fcl"}, {"n_jobs": 2}, None], ids=str
 )
 def test_broadphase_and_threads_do_not_change_the_volumes(options):
-    """Bit for bit; ``{}`` is ``broadphase="auto"``, which builds coal's BVH for 300 poses."""
-    pytest.importorskip(options.get("broadphase", "coal"))
+    """Bit for bit; None is the name ``"exact"``: the library defaults (coal, every core)."""
+    pytest.importorskip((options or {}).get("broadphase", "coal"))
     a = primitives.sphere(0.04, segments=24)
     b = primitives.box((0.03, 0.03, 0.03))
     poses = np.stack([translation(x, 0.01, 0) for x in np.linspace(-0.12, 0.12, 300)])
-    reference = intersection_volume(a, b, poses, broadphase=None)
+    reference = intersection_volume(a, b, poses, backend=ExactBackend(broadphase=None, n_jobs=1))
     assert reference[0] == 0.0 and reference[150] > 0
-    assert np.array_equal(intersection_volume(a, b, poses, **options), reference)
+    backend = "exact" if options is None else ExactBackend(**options)
+    assert np.array_equal(intersection_volume(a, b, poses, backend=backend), reference)
 
 
 # -- real data ------------------------------------------------------------------------------

@@ -346,28 +346,27 @@ def test_backend_volumes_cache_and_params():
     assert backend.name == "voxel" and "VoxelBackend(hand_resolution=60" in repr(backend)
 
 
-def test_every_parameter_keys_the_grid_or_the_points():
-    from exactgrasp.backends.voxel.backend import GRID_PARAMETERS, POINT_PARAMETERS
+def test_each_backend_owns_its_grids_and_points_and_shared_ones_share_them():
+    import pickle
 
-    # A parameter missing from both would let a cached grid or point set of other settings
-    # serve a backend; the hand's resolution alone does not shape the points.
-    assert set(GRID_PARAMETERS) | set(POINT_PARAMETERS) == set(VoxelBackend.parameter_constraints)
-    assert "hand_resolution" not in POINT_PARAMETERS
+    from exactgrasp.backends import shared_backend
 
-
-def test_backends_share_grids_and_points_of_the_same_geometry():
     grasp = ArrayGrasp(HAND_BOX, [box_arrays([-0.5, -0.3, -0.4], [0.5, 0.3, 0.4])])
-    first, second = VoxelBackend(hand_resolution=30), VoxelBackend(hand_resolution=30)
-    assert first.hand_grid(grasp) is second.hand_grid(grasp)
-    assert first.object_point_set(grasp) is second.object_point_set(grasp)
-    other = VoxelBackend(hand_resolution=31, object_resolution=20)
-    assert other.hand_grid(grasp) is not first.hand_grid(grasp)
-    assert other.object_point_set(grasp) is not first.object_point_set(grasp)
-    assert VoxelBackend(hand_resolution=31).object_point_set(grasp) is first.object_point_set(
-        grasp
-    )
+    first = shared_backend("voxel", hand_resolution=30)
+    assert shared_backend("voxel", hand_resolution=30) is first
+    assert first.hand_grid(grasp) is first.hand_grid(grasp)
+    assert first.object_point_set(grasp) is first.object_point_set(grasp)
+    own = VoxelBackend(hand_resolution=30)
+    assert own.hand_grid(grasp) is not first.hand_grid(grasp)
+    assert first._hand_grids.builds == 1 and first._hand_grids.hits == 2
     moved = ArrayGrasp(HAND_BOX, [box_arrays([-0.4, -0.3, -0.4], [0.5, 0.3, 0.4])])
     assert first.object_point_set(moved) is not first.object_point_set(grasp)
+    # A copy (as a batch task carries) has the parameters and none of the cached geometry;
+    # the copies made in one process share their caches.
+    copy = pickle.loads(pickle.dumps(first))
+    assert copy.params == first.params and len(copy._hand_grids) == 0
+    again = pickle.loads(pickle.dumps(first))
+    assert again._hand_grids is copy._hand_grids and again._hand_grids is not first._hand_grids
 
 
 def test_volumes_with_progress_reports_every_pose():
@@ -381,7 +380,7 @@ def test_volumes_with_progress_reports_every_pose():
     np.testing.assert_array_equal(backend.volumes_with_progress(grasp, poses[:2]), volumes[:2])
 
 
-def test_hand_volume_is_computed_once_per_hand():
+def test_hand_volume_is_computed_once_per_hand_and_backend():
     class CountingGrasp(ArrayGrasp):
         unions = 0
 
@@ -391,8 +390,9 @@ def test_hand_volume_is_computed_once_per_hand():
             return 8.0
 
     grasp = CountingGrasp([box_arrays([-1, -1, -1], [1, 1, 1.5])], HAND_BOX)
-    assert VoxelBackend().hand_volume(grasp) == 8.0
-    assert VoxelBackend(hand_resolution=20).hand_volume(CountingGrasp(grasp.links, [])) == 8.0
+    backend = VoxelBackend()
+    assert backend.hand_volume(grasp) == 8.0
+    assert backend.hand_volume(CountingGrasp(grasp.links, [])) == 8.0
     assert CountingGrasp.unions == 1
 
 

@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from exactgrasp.backends.base import Backend, check_poses
     from exactgrasp.backends.registry import (
         ENTRY_POINT_GROUP,
+        as_backend,
         available_backends,
         backend_class,
         get_backend,
@@ -34,6 +35,7 @@ __getattr__, __dir__ = lazy_names(
         "exactgrasp.backends.base": ("Backend", "check_poses"),
         "exactgrasp.backends.registry": (
             "ENTRY_POINT_GROUP",
+            "as_backend",
             "available_backends",
             "backend_class",
             "get_backend",
@@ -48,6 +50,7 @@ __getattr__, __dir__ = lazy_names(
 __all__ = [
     "ENTRY_POINT_GROUP",
     "Backend",
+    "as_backend",
     "available_backends",
     "backend_class",
     "check_poses",

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import abc
 import contextlib
+import json
 import os
 from collections.abc import Callable, Iterator
 from contextvars import ContextVar
@@ -14,7 +15,9 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from exactgrasp.backends import defaults
 from exactgrasp.backends.params import Param
+from exactgrasp.cache import LRUCache
 from exactgrasp.errors import BackendError
 from exactgrasp.geometry.se3 import rigid_defect, rigid_defects
 
@@ -168,6 +171,10 @@ def resolve_jobs(n_jobs: int | None) -> int:
     return int(n_jobs)
 
 
+#: The caches of the backends copied into this process (`Backend.__setstate__`), by class and
+#: parameters.
+_COPIED_CACHES = LRUCache(defaults.SHARED_CACHE_SIZE)
+
 #: Pieces a backend without a progress hook of its own computes the poses in when a caller
 #: follows its progress (`Backend.volumes_with_progress`).
 PROGRESS_PIECES = 20
@@ -260,6 +267,27 @@ class Backend(abc.ABC):
         union overrides it to spare a second one.
         """
         return grasp.canonical_hand_volume
+
+    def __getstate__(self) -> dict[str, Any]:
+        """The instance without what its caches hold: a copy (a batch task's) carries the
+        parameters, and builds its geometry where it runs."""
+        return {
+            key: LRUCache(value.maxsize) if isinstance(value, LRUCache) else value
+            for key, value in self.__dict__.items()
+        }
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """A copy takes the caches of the first copy of the same class and parameters made in
+        this process: every task a batch worker runs brings its own copy of the run's
+        backend, and the hands and objects they share are then prepared once."""
+        self.__dict__.update(state)
+        cls = type(self)
+        try:
+            key = json.dumps([cls.__module__, cls.__qualname__, self.params], sort_keys=True)
+        except (TypeError, ValueError):
+            return
+        caches = {k: v for k, v in self.__dict__.items() if isinstance(v, LRUCache)}
+        self.__dict__.update(_COPIED_CACHES.get(key, lambda: caches))
 
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self.params.items())

@@ -1,7 +1,8 @@
 """Default values of the backends and of the code that picks them: the one place they are set.
 
-The backends, `exactgrasp.descriptor`, `exactgrasp.compare`, `exactgrasp.overlap`, the batch
-runner and the command line read their defaults from here.
+The backends' constructors read them from here; everything else that runs a backend takes
+``backend=`` (a registered name, meaning these defaults, or a configured instance), so no
+other module writes a backend's default again.
 """
 
 from __future__ import annotations
@@ -18,6 +19,12 @@ VOXEL_OBJECT_RESOLUTION = 50
 #: How many cubic voxels a grid's shorter side gets: "floor" (the authors' code, the default)
 #: or "round".
 VOXEL_GRID_RULES = ("floor", "round")
+#: The grid rule used when none is named.
+VOXEL_GRID_RULE = VOXEL_GRID_RULES[0]
+#: Weight of a surface sample: "paper" (w_s = V_o/2 * 1/16, the default) or "area".
+VOXEL_SURFACE_WEIGHT = "paper"
+#: Seed of the voxel backend's surface sampler.
+VOXEL_SEED = 0
 #: Hand grids and object point sets a `VoxelBackend` keeps, each (least recently used first out).
 VOXEL_CACHE_SIZE = 8
 
@@ -38,18 +45,6 @@ EXACT_CAPACITY = 400_000
 EXACT_CELLS_PER_EXTENT = 48
 #: Exact intersectors (one per grasp geometry) an `ExactBackend` keeps.
 EXACT_CACHE_SIZE = 4
-
-#: `exactgrasp.overlap.intersection_volume`'s broad phase. It differs from
-#: `EXACT_BROADPHASE` because nothing keeps its intersector for a later call: ``"auto"`` builds
-#: coal's BVH only for stacks of more than `OVERLAP_AUTO_BVH_POSES` poses, where it pays.
-OVERLAP_BROADPHASE = "auto"
-#: ``"auto"`` builds coal's BVH for stacks of more poses than this: building it costs about
-#: what the kernel spends on a few hundred poses, and it only saves the kernel's time on poses
-#: whose surfaces are apart (see docs/penetration-volume.md).
-OVERLAP_AUTO_BVH_POSES = 256
-#: `exactgrasp.overlap.intersection_volume`'s threads over poses: one, since a call on two
-#: meshes is often a single pose and threads would only add their start-up.
-OVERLAP_N_JOBS = 1
 
 #: Backend instances `exactgrasp.backends.registry.shared_backend` keeps.
 SHARED_CACHE_SIZE = 16

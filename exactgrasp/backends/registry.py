@@ -26,6 +26,7 @@ __all__ = [
     "BUILTIN_BACKENDS",
     "ENTRY_POINT_GROUP",
     "BackendEntry",
+    "as_backend",
     "available_backends",
     "backend_class",
     "get_backend",
@@ -245,3 +246,33 @@ def shared_backend(name: str | Backend, **params: Any) -> Backend:
     except (TypeError, ValueError):
         key = None
     return _SHARED.get(key, lambda: get_backend(name, **params))
+
+
+def as_backend(backend: str | Backend) -> Backend:
+    """The backend a caller named: the one spelling of ``backend=`` in every public function.
+
+    Parameters
+    ----------
+    backend : str or Backend
+        A registered name, which means that backend with the library defaults
+        (`exactgrasp.backends.defaults`; one instance per process, `shared_backend`, so its
+        caches serve every later call), or a configured instance, used as it is (e.g.
+        ``ExactBackend(broadphase=None, n_jobs=1)``).
+
+    Returns
+    -------
+    Backend
+
+    Raises
+    ------
+    BackendError, MissingDependencyError
+        An unknown name or another type; an optional package the backend needs is missing.
+    """
+    if isinstance(backend, Backend):
+        return backend
+    if not isinstance(backend, str):
+        raise BackendError(
+            f"backend must be a name or a Backend, got {type(backend).__name__}; pass e.g. "
+            "backend='exact' or backend=ExactBackend(broadphase=None, n_jobs=1)."
+        )
+    return shared_backend(backend)

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from exactgrasp.backends import Backend, get_backend
+from exactgrasp.backends import Backend, as_backend
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
 from exactgrasp.batch.manifest import DEFAULT_PART_SIZE, Manifest, ManifestRow, read_manifest
 from exactgrasp.batch.store import (
@@ -161,7 +161,6 @@ def run_batch(
     sampler: PathSampler | str | dict | None = None,
     workers: int | None = None,
     scheduler: str | None = None,
-    backend_params: dict | None = None,
     progress: bool | None = None,
     part_size: int = DEFAULT_PART_SIZE,
     on_limit: str | None = None,
@@ -178,8 +177,10 @@ def run_batch(
     out : path-like
         Output folder (created). Running again with the same arguments finishes what is left.
     backend : str or Backend
-        A registered name (``"voxel"``, the default `backends.defaults.DEFAULT_BACKEND`;
-        ``"exact"``; ...) or an instance.
+        A registered name with the library defaults (``"voxel"``, the default
+        `backends.defaults.DEFAULT_BACKEND`; ``"exact"``; ...) or a configured instance, e.g.
+        ``ExactBackend(broadphase=None)``: a copy travels to each task (it must pickle), and
+        the copies in one worker process share their caches (`Backend.__setstate__`).
     sampler : PathSampler or str or dict, optional
         Anything `exactgrasp.paths.as_sampler` takes; default: the ``"balanced"`` preset.
     workers : int, optional
@@ -188,8 +189,6 @@ def run_batch(
     scheduler : str, optional
         Address of a running dask scheduler (``tcp://host:8786``); its workers must be able
         to import exactgrasp and read the grasp files.
-    backend_params : dict, optional
-        Passed to `get_backend`.
     progress : bool, optional
         Progress bar; default only on a terminal.
     part_size : int
@@ -238,8 +237,9 @@ def run_batch(
         raise BatchError(f"repair must be True, False or None, got {repair!r}.")
     overrides = given({"units": units, "repair": repair, "on_limit": on_limit})
     sampler = as_sampler(sampler)
-    engine = get_backend(backend, **(backend_params or {}))
-    spec = engine if isinstance(backend, Backend) else (backend, dict(backend_params or {}))
+    engine = as_backend(backend)
+    # A name travels as it is and each worker builds its own; an instance travels as a copy.
+    spec = backend if isinstance(backend, str) else engine
     manifest = read_manifest(manifest)
     params = _run_params(
         manifest, engine, sampler, part_size=part_size, **{"on_limit": None, **overrides}

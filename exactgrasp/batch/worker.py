@@ -59,13 +59,11 @@ WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
 # -- on the workers -----------------------------------------------------------------------------
 
 
-def _worker_backend(spec: Backend | tuple[str, dict]) -> Backend:
-    # One instance per (name, parameters) in this worker process: its caches (hand grids,
-    # object points) then serve every later grasp with the same hand or object.
-    if isinstance(spec, Backend):
-        return spec
-    name, params = spec
-    return shared_backend(name, **params)
+def _worker_backend(spec: str | Backend) -> Backend:
+    # A name: one instance per worker process. An instance: the copy a task brought, which
+    # shares the caches of the worker's earlier copies (`Backend.__setstate__`). Either way its
+    # hand grids, object points and intersectors serve every later grasp in this process.
+    return shared_backend(spec)
 
 
 def _load_grasp(row: ManifestRow, base_dir: Path, overrides: dict) -> Grasp:
@@ -83,7 +81,7 @@ def _load_grasp(row: ManifestRow, base_dir: Path, overrides: dict) -> Grasp:
 def compute_rows(
     rows: list[ManifestRow],
     base_dir: str,
-    backend: Backend | tuple[str, dict],
+    backend: str | Backend,
     sampler_params: dict,
     overrides: dict | None = None,
     expected: list | None = None,
@@ -96,8 +94,9 @@ def compute_rows(
     rows : list of ManifestRow
     base_dir : str
         Folder relative grasp paths are resolved against (the manifest's).
-    backend : Backend or (str, dict)
-        A backend, or its name and parameters (built once per worker process).
+    backend : str or Backend
+        A registered name (the library defaults; one instance per worker process) or a
+        configured instance (used as it is).
     sampler_params : dict
         `PathSampler.params`.
     overrides : dict, optional
@@ -169,7 +168,7 @@ def compute_rows(
     }
 
 
-def warm_up(backend: Backend | tuple[str, dict]) -> str:
+def warm_up(backend: str | Backend) -> str:
     """Ready this worker process before any row: threads limited (`limit_threads`), the
     backend built, its compiled kernels loaded from numba's cache.
 
@@ -179,7 +178,7 @@ def warm_up(backend: Backend | tuple[str, dict]) -> str:
 
     Parameters
     ----------
-    backend : Backend or (str, dict)
+    backend : str or Backend
 
     Returns
     -------
@@ -211,7 +210,7 @@ class _SerialPool:
     def __init__(self):
         self._queue: deque = deque()
 
-    def warm(self, backend: Backend | tuple[str, dict]) -> None:
+    def warm(self, backend: str | Backend) -> None:
         """Nothing to ready: the rows run here."""
 
     def submit(self, chunk: tuple, args: tuple) -> None:
@@ -260,7 +259,7 @@ class _DaskPool:
     def in_flight(self) -> int:
         return len(self._chunks)
 
-    def warm(self, backend: Backend | tuple[str, dict]) -> None:
+    def warm(self, backend: str | Backend) -> None:
         """`warm_up` on every worker there now, all at once, before any row is handed out:
         a worker still importing would otherwise sit on the tasks given to it."""
         workers = list(self.client.scheduler_info()["workers"])

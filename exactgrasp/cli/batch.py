@@ -59,10 +59,10 @@ BATCH_TERMS = FlagTerms(
 def cmd_batch(args: argparse.Namespace) -> int:
     """Handler of ``exactgrasp batch``; returns 0 when every row succeeded, 1 otherwise."""
     sampler = sampler_from_args(args)
-    params = split_params(args.param, [args.backend])[args.backend]
-    build_backend(args.backend, params)  # refuses bad parameters before any work starts
+    # Built here, so that bad parameters are refused before any work starts.
+    backend = build_backend(args.backend, split_params(args.param, [args.backend])[args.backend])
     try:
-        summary = _run(args, sampler, params)
+        summary = _run(args, sampler, backend)
     except BatchError as exc:
         if not exc.fixes:
             raise
@@ -71,18 +71,17 @@ def cmd_batch(args: argparse.Namespace) -> int:
     return summary.exit_status
 
 
-def _run(args: argparse.Namespace, sampler, params: dict):
+def _run(args: argparse.Namespace, sampler, backend):
     """`run_batch` with the command's arguments."""
     from exactgrasp.batch.run import run_batch
 
     return run_batch(
         args.manifest,
         args.out,
-        backend=args.backend,
+        backend=backend,
         sampler=sampler,
         workers=args.workers,
         scheduler=args.scheduler,
-        backend_params=params,
         progress=args.progress,
         part_size=args.part_size,
         on_limit=args.on_limit,

@@ -23,12 +23,12 @@ from exactgrasp.cli.common import (
 )
 from exactgrasp.errors import ClosingError, JointError
 from exactgrasp.geometry.bvh import ENGINES
-from exactgrasp.grasp.closing import ClosingResult, close_fingers
+from exactgrasp.grasp.closing import ClosingResult, close_fingers_result
 
 __all__ = ["add_parser", "cmd_close", "summary_lines"]
 
 #: Defaults of `close_fingers`' options, shown and used by the flags.
-DEFAULTS = {k: p.default for k, p in inspect.signature(close_fingers).parameters.items()}
+DEFAULTS = {k: p.default for k, p in inspect.signature(close_fingers_result).parameters.items()}
 #: `close_fingers`' arguments and the flags that set them here.
 CLOSING_TERMS = FlagTerms(
     {
@@ -117,7 +117,7 @@ def cmd_close(args: argparse.Namespace) -> int:
         with warnings.catch_warnings():
             # The summary below says how far the object moved, in the command's own words.
             warnings.filterwarnings("ignore", "close_fingers: the open hand penetrates")
-            result = close_fingers(
+            result = close_fingers_result(
                 grasp.hand,
                 grasp.object,
                 grasp.object_pose,
@@ -127,7 +127,6 @@ def cmd_close(args: argparse.Namespace) -> int:
                 step=args.step,
                 backoff=args.backoff,
                 engine=args.engine,
-                full_output=True,
             )
     except (ClosingError, JointError) as exc:
         raise in_flag_terms(exc, CLOSING_TERMS, f"grasp {grasp.name!r}: ") from exc

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -14,6 +15,7 @@ from exactgrasp.cli.params import add_param, backend_names, build_backend, split
 from exactgrasp.paths.presets import as_sampler
 
 if TYPE_CHECKING:
+    from exactgrasp.backends.base import Backend
     from exactgrasp.descriptor import Descriptor
     from exactgrasp.grasp import Grasp
 
@@ -95,7 +97,7 @@ def run_demo(
     quick: bool = False,
     progress: bool | None = None,
     n_steps: int | None = None,
-    backend_params: dict[str, dict[str, Any]] | None = None,
+    backends: Sequence[Backend] | None = None,
 ) -> int:
     """Compute descriptors of the demo grasps with every available backend.
 
@@ -114,22 +116,24 @@ def run_demo(
         Progress bars; default only on a terminal.
     n_steps : int, optional
         Poses per path, replacing the sampler's.
-    backend_params : dict, optional
-        ``{backend: {parameter: value}}``; backends not named take their defaults.
+    backends : sequence of Backend, optional
+        The backends to run, configured; default: every available one with the library
+        defaults.
 
     Returns
     -------
     int
         Exit status (0).
     """
-    from exactgrasp.backends import get_backend
+    from exactgrasp.backends import as_backend
     from exactgrasp.descriptor import compute_descriptor
 
     out.mkdir(parents=True, exist_ok=True)
     sampler = as_sampler(QUICK_SAMPLER if quick else sampler, n_steps=n_steps)
-    backends = backend_names()
-    params = backend_params or {}
-    engines = {name: get_backend(name, **params.get(name, {})) for name in backends}
+    if backends is None:
+        backends = [as_backend(name) for name in backend_names()]
+    engines = {engine.name: engine for engine in backends}
+    backends = list(engines)
     print(f"sampler: {sampler!r} ({sampler.n_paths} paths, {sampler.n_poses} poses)")
     print(f"backends: {', '.join(backends)}")
     grasps = demo_grasps()
@@ -172,9 +176,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
         sampler = as_sampler(QUICK_SAMPLER, n_steps=args.steps)
     names = backend_names()
     params = split_params(args.param, names)
-    for name in names:
-        build_backend(name, params[name])  # refuses bad parameters before any work starts
-    return run_demo(Path(args.out), sampler, progress=args.progress, backend_params=params)
+    backends = [build_backend(name, params[name]) for name in names]
+    return run_demo(Path(args.out), sampler, progress=args.progress, backends=backends)
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:

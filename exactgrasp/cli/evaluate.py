@@ -19,7 +19,7 @@ from exactgrasp.cli.common import (
     read_grasp,
     sampler_from_args,
 )
-from exactgrasp.cli.params import add_param, split_params
+from exactgrasp.cli.params import add_param, build_backend, split_params
 from exactgrasp.evaluation.names import (
     BASELINES,
     BOOTSTRAP_UNITS,
@@ -69,6 +69,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     pairs, sources = read_pairs(args.pairs, args.manifest)
     sampler = sampler_from_args(args)
     params = split_params(args.param, [args.backend])[args.backend]
+    # The name alone means the defaults (and the settings record no parameters).
+    backend = build_backend(args.backend, params) if params else args.backend
     grasps = _grasps(args, sources)
     baselines = None if args.baseline is None else [b for b in args.baseline if b != "none"]
     result = evaluate(
@@ -76,14 +78,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         pairs,
         distances=args.distance or DEFAULT_DISTANCES,
         baselines=baselines,
-        backend=args.backend,
+        backend=backend,
         sampler=sampler,
         symmetries=args.symmetry,
         cache_dir=args.cache,
         n_boot=args.n_boot,
         seed=args.seed,
         unit=args.bootstrap,
-        backend_params=params,
     )
     command = "exactgrasp " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     files = write_evaluation(result, args.output, command=command)

@@ -10,8 +10,9 @@ from typing import Any
 
 import numpy as np
 
+from exactgrasp.backends.base import Backend
 from exactgrasp.backends.defaults import DEFAULT_BACKEND
-from exactgrasp.backends.registry import shared_backend
+from exactgrasp.backends.registry import as_backend
 from exactgrasp.descriptor import Descriptor, compute_descriptor
 from exactgrasp.errors import EvaluationError
 from exactgrasp.evaluation.baselines import BASELINES, baseline_matrix
@@ -202,7 +203,7 @@ def evaluate(
     pairs: LabelledPairs,
     distances: Sequence[str] = DEFAULT_DISTANCES,
     baselines: Sequence[str] | None = None,
-    backend: str = DEFAULT_BACKEND,
+    backend: str | Backend = DEFAULT_BACKEND,
     sampler: Any = None,
     symmetries: Any = None,
     cache_dir: str | os.PathLike | None = None,
@@ -210,7 +211,6 @@ def evaluate(
     seed: int = 0,
     unit: str = "grasp",
     level: float = 0.95,
-    backend_params: dict[str, Any] | None = None,
 ) -> EvaluationResult:
     """AUC with a bootstrap interval of descriptor distances (and baselines) on labelled pairs.
 
@@ -227,7 +227,9 @@ def evaluate(
     baselines : sequence of str, optional
         Of `exactgrasp.evaluation.baselines.BASELINES`; default: all for grasps of one hand
         and one object, ``position`` and ``contacts`` otherwise; none for descriptors.
-    backend : str
+    backend : str or Backend
+        A registered name (library defaults) or a configured instance, e.g.
+        ``VoxelBackend(object_resolution=30)``.
     sampler : PathSampler or str or dict, optional
         Anything `exactgrasp.paths.as_sampler` takes (default: the balanced preset).
     symmetries : str or sequence, optional
@@ -237,7 +239,6 @@ def evaluate(
         Folder of cached descriptors (and their symmetric values).
     n_boot, seed, unit, level
         Bootstrap settings (`exactgrasp.evaluation.roc.bootstrap_auc`).
-    backend_params : dict, optional
 
     Returns
     -------
@@ -248,17 +249,18 @@ def evaluate(
         raise EvaluationError(
             f"{len(items)} grasps or descriptors given, but the pairs name {len(pairs.names)}."
         )
-    params = dict(backend_params or {})
+    # What the settings record: nothing for a name (the defaults), an instance's parameters.
+    params = {} if isinstance(backend, str) else dict(backend.params)
     named_symmetries = as_symmetries(symmetries)
     is_grasp = [isinstance(x, Grasp) for x in items]
     if all(is_grasp):
         sampler = as_sampler(sampler)
-        instance = shared_backend(backend, **params)
+        instance = as_backend(backend)
         cache = DescriptorCache(Path(cache_dir)) if cache_dir is not None else None
         stacks = []
         for g in items:
             d = (
-                cache.descriptor(g, sampler, backend, **params)
+                cache.descriptor(g, sampler, backend)
                 if cache is not None
                 else compute_descriptor(g, sampler, backend=instance, progress=False)
             )
@@ -302,7 +304,11 @@ def evaluate(
         for name, m in matrices.items()
     }
     settings = {
-        "backend": backend if all(is_grasp) else "(descriptors given)",
+        "backend": (
+            (backend if isinstance(backend, str) else backend.name)
+            if all(is_grasp)
+            else "(descriptors given)"
+        ),
         "backend_params": params,
         "sampler": (
             as_sampler(sampler).params if all(is_grasp) else items[0].metadata.get("sampler")

@@ -32,7 +32,7 @@ from exactgrasp.evaluation.pairs import LabelledPairs, pairs_from_groups
 from exactgrasp.evaluation.roc import bootstrap_auc
 from exactgrasp.evaluation.symmetry import as_symmetries
 from exactgrasp.grasp import Grasp
-from exactgrasp.grasp.closing import close_fingers
+from exactgrasp.grasp.closing import close_fingers_result
 from exactgrasp.paths.sampler import PathSampler
 from exactgrasp.report.cache import DescriptorCache
 from exactgrasp.report.config import CONTACT_OBJECTS, ValidationConfig
@@ -369,7 +369,7 @@ def placed_grasps(
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                closed = close_fingers(hand, g.object, object_pose=pose, full_output=True)
+                closed = close_fingers_result(hand, g.object, object_pose=pose)
         except ExactGraspError as exc:
             notes.append({"grasp": g.name, "skipped": str(exc)})
             continue

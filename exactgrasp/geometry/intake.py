@@ -20,6 +20,7 @@ if TYPE_CHECKING:
 __all__ = [
     "MAX_PLAUSIBLE_SIZE_M",
     "ORIENTATIONS",
+    "REPAIR",
     "UNITS",
     "load_points",
     "load_trimesh",
@@ -40,6 +41,11 @@ UNITS: dict[str, float] = {
 MAX_PLAUSIBLE_SIZE_M = 5.0
 
 ORIENTATIONS = ("flip", "refuse")
+
+#: Whether a mesh is repaired (closed and oriented by trimesh and pymeshfix, with a warning)
+#: when nobody says: the one default of every ``repair`` option (solids, hands, hand models,
+#: grasp files' ``object_repair`` and ``hand.repair``, `exactgrasp.overlap`).
+REPAIR = False
 
 
 def unit_scale(units: str) -> float:

@@ -21,6 +21,7 @@ from exactgrasp.errors import Fix, MeshError
 from exactgrasp.geometry.intake import (
     MAX_PLAUSIBLE_SIZE_M,
     ORIENTATIONS,
+    REPAIR,
     UNITS,
     load_points,
     load_trimesh,
@@ -89,7 +90,7 @@ class Solid:
         *,
         units: str = "m",
         name: str | None = None,
-        repair: bool = False,
+        repair: bool = REPAIR,
         orientation: str = "flip",
         surface_samples: Any = None,
         check_scale: bool = True,
@@ -159,7 +160,7 @@ class Solid:
         solid.source = {
             "path": str(path.resolve()),
             "units": units,
-            "repair": bool(kwargs.get("repair", False)),
+            "repair": bool(kwargs.get("repair", REPAIR)),
             "surface_samples": str(Path(samples).resolve())
             if isinstance(samples, str | os.PathLike)
             else None,

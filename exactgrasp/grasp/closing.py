@@ -39,6 +39,7 @@ __all__ = [
     "ClosingResult",
     "FingerResult",
     "close_fingers",
+    "close_fingers_result",
     "close_grasp",
     "closing_directions",
 ]
@@ -91,7 +92,7 @@ class FingerResult:
 
 @dataclass(frozen=True, repr=False)
 class ClosingResult:
-    """What `close_fingers` did (``full_output=True``).
+    """What `close_fingers_result` did.
 
     Attributes
     ----------
@@ -136,6 +137,28 @@ class ClosingResult:
 
 
 def close_fingers(
+    hand: Hand, object: Solid, object_pose: Any = None, joints: Any = None, **options: Any
+) -> Hand:
+    """Close the fingers until they touch the object, never penetrating it: the closed hand.
+
+    Parameters
+    ----------
+    hand, object, object_pose, joints
+        As for `close_fingers_result`.
+    **options
+        `close_fingers_result`'s keyword options (``tolerance``, ``step``, ``backoff``,
+        ``engine``, ``direction``).
+
+    Returns
+    -------
+    Hand
+        `close_fingers_result`'s ``hand``; that function also returns the moved object pose,
+        the back-off and each finger's contacts and directions.
+    """
+    return close_fingers_result(hand, object, object_pose, joints, **options).hand
+
+
+def close_fingers_result(
     hand: Hand,
     object: Solid,
     object_pose: Any = None,
@@ -145,10 +168,9 @@ def close_fingers(
     step: float = 0.05,
     backoff: bool = True,
     engine: str = DEFAULT_ENGINE,
-    full_output: bool = False,
     direction: Any = None,
-) -> Hand | ClosingResult:
-    """Close the fingers until they touch the object, never penetrating it.
+) -> ClosingResult:
+    """Close the fingers until they touch the object, never penetrating it: what it did.
 
     Parameters
     ----------
@@ -172,9 +194,6 @@ def close_fingers(
         False raise `ClosingError` naming the depth instead.
     engine : {"coal", "fcl"}
         Distance library.
-    full_output : bool
-        Return a `ClosingResult` (hand, moved object pose, back-off, per-finger contacts and
-        directions).
     direction : dict of str to int, optional
         ``{joint: +1 | -1}``: close towards the upper (+1) or the lower (-1) limit. Joints
         not named take the model's ``closing_directions`` if set, else the direction that
@@ -184,7 +203,9 @@ def close_fingers(
 
     Returns
     -------
-    Hand or ClosingResult
+    ClosingResult
+        The closed hand, the moved object pose, the back-off, per-finger contacts and
+        directions.
 
     Raises
     ------
@@ -214,8 +235,8 @@ def close_fingers(
     if offset > 0:
         warn_caller(
             f"close_fingers: the open hand penetrates {object.name}; the object was moved "
-            f"{offset * 1e3:.3f} mm out along the palm normal (full_output=True or close_grasp "
-            "return the moved pose)"
+            f"{offset * 1e3:.3f} mm out along the palm normal (close_fingers_result or "
+            "close_grasp return the moved pose)"
         )
     results = [
         FingerResult(
@@ -234,8 +255,7 @@ def close_fingers(
             "to the palm (along the palm normal) or between the fingers."
         )
     hand = hand.with_joints(closed)
-    result = ClosingResult(hand, scene.object_pose.copy(), offset, tuple(results))
-    return result if full_output else hand
+    return ClosingResult(hand, scene.object_pose.copy(), offset, tuple(results))
 
 
 def closing_directions(
@@ -251,7 +271,7 @@ def closing_directions(
     ----------
     hand : Hand
     joints, direction
-        As for `close_fingers`.
+        As for `close_fingers_result`.
     object : Solid, optional
         Needed only when the hand has no palm frame (directions are then inferred towards
         the object's centroid).
@@ -273,21 +293,22 @@ def closing_directions(
 
 
 def close_grasp(grasp: Grasp, **options: Any) -> Grasp:
-    """`close_fingers` on a grasp: the closed hand with the (possibly moved) object pose.
+    """`close_fingers_result` on a grasp: the closed hand with the (possibly moved) object
+    pose.
 
     Parameters
     ----------
     grasp : Grasp
     **options
-        `close_fingers` keyword arguments (``joints``, ``tolerance``, ``backoff``, ...).
+        `close_fingers_result` keyword arguments (``joints``, ``tolerance``, ``backoff``,
+        ...).
 
     Returns
     -------
     Grasp
     """
-    options["full_output"] = True
     try:
-        result = close_fingers(grasp.hand, grasp.object, grasp.object_pose, **options)
+        result = close_fingers_result(grasp.hand, grasp.object, grasp.object_pose, **options)
     except (ClosingError, JointError) as exc:
         raise exc.prefixed(f"grasp {grasp.name!r}: ") from exc
     from exactgrasp.grasp.grasp import Grasp

@@ -24,7 +24,7 @@ from exactgrasp.errors import (
     ModelError,
 )
 from exactgrasp.geometry.files import relative_path, resolve_path, write_ply
-from exactgrasp.geometry.intake import unit_scale
+from exactgrasp.geometry.intake import REPAIR, unit_scale
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.grasp.schema import schema_dict
 from exactgrasp.hands.frame import HandFrame
@@ -137,7 +137,7 @@ def read_object(data: dict, base_dir: Path, source: str, overrides: dict) -> Sol
     samples = overrides.get("surface_samples", data.get("object_surface_samples"))
     if isinstance(samples, str | os.PathLike):
         samples = resolve_path(base_dir, samples, source, "object_surface_samples")
-    repair = overrides.get("repair", data.get("object_repair", False))
+    repair = overrides.get("repair", data.get("object_repair", REPAIR))
     try:
         return Solid.from_file(
             path,

@@ -62,7 +62,3 @@ __all__ = [
     "shadow_hand",
     "shadow_hand_model",
 ]
-
-
-#: The old name of `get_builtin`.
-get = get_builtin

@@ -19,6 +19,7 @@ import numpy as np
 import trimesh
 
 from exactgrasp.errors import Fix, FrameError, JointError, MeshError
+from exactgrasp.geometry.intake import REPAIR
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.given import given
 from exactgrasp.hands.frame import HandFrame
@@ -136,7 +137,7 @@ class Hand:
         path: str | os.PathLike,
         frame: HandFrame | None = None,
         units: str = "m",
-        repair: bool = False,
+        repair: bool = REPAIR,
     ) -> Hand:
         """A rigid hand from one mesh file: one link, the solid its closed shells bound.
 
@@ -381,7 +382,7 @@ def _as_solid(mesh: Any, units: str, name: str) -> Solid:
         return Solid(mesh.vertices, mesh.faces, units=units, name=name)
     if isinstance(mesh, tuple | list) and len(mesh) == 2:
         return Solid(mesh[0], mesh[1], units=units, name=name)
-    raise JointError(
+    raise MeshError(
         f"link {name}: expected a trimesh.Trimesh, a Solid or a (vertices, faces) pair, got "
         f"{type(mesh).__name__}."
     )

@@ -20,6 +20,7 @@ from typing import Any
 from exactgrasp.cache import LRUCache
 from exactgrasp.errors import ModelError
 from exactgrasp.geometry.files import file_identity
+from exactgrasp.geometry.intake import REPAIR
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.model import KinematicModel
 from exactgrasp.hands.packages import PackageResolver, package_env, rewrite_spec, rewrite_urdf
@@ -166,7 +167,7 @@ def load_model(
     palm=None,
     couplings=None,
     package_dirs=None,
-    repair: bool = False,
+    repair: bool = REPAIR,
     xml: str | None = None,
 ) -> KinematicModel:
     """Compile an MJCF (.xml) or URDF (.urdf) hand model with MuJoCo.

@@ -13,6 +13,7 @@ from typing import Any, Protocol
 
 from exactgrasp.errors import GraspFileError
 from exactgrasp.geometry.files import relative_path, resolve_path, write_ply
+from exactgrasp.geometry.intake import REPAIR
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.hands.builtins import get_builtin
 from exactgrasp.hands.frame import HandFrame
@@ -142,7 +143,7 @@ class FileSource:
         spec = data["hand"]
         path = resolve_path(base_dir, spec["path"], source, "hand mesh")
         return Hand.from_file(
-            path, frame=frame, units=spec.get("units", "m"), repair=spec.get("repair", False)
+            path, frame=frame, units=spec.get("units", "m"), repair=spec.get("repair", REPAIR)
         )
 
     def write(self, hand, base_dir, stem):

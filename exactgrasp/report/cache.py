@@ -51,7 +51,7 @@ class DescriptorCache:
         self.compute_seconds: dict[str, float] = {}
         self._used: set[Path] = set()
 
-    def backend(self, name: str, **params: Any) -> Backend:
+    def backend(self, name: str | Backend, **params: Any) -> Backend:
         """One backend instance per (name, parameters) in this process
         (`exactgrasp.backends.registry.shared_backend`), so hand grids and object points that
         backends cache per geometry are reused across grasps."""
@@ -68,7 +68,7 @@ class DescriptorCache:
         return self.folder / backend.name / f"{stem}.{digest}.npz"
 
     def descriptor(
-        self, grasp: Grasp, sampler: PathSampler, backend: str, **params: Any
+        self, grasp: Grasp, sampler: PathSampler, backend: str | Backend, **params: Any
     ) -> Descriptor:
         """The descriptor, from the cache or computed (and then cached).
 
@@ -76,9 +76,9 @@ class DescriptorCache:
         ----------
         grasp : Grasp
         sampler : PathSampler
-        backend : str
+        backend : str or Backend
         **params
-            Backend parameters.
+            Backend parameters, with a name only.
 
         Returns
         -------
@@ -86,6 +86,7 @@ class DescriptorCache:
             ``metadata["seconds"]`` is the time it took when it was computed.
         """
         instance = self.backend(backend, **params)
+        backend = instance.name
         path = self.path(grasp, instance, sampler)
         if path.exists():
             self.loaded += 1

@@ -19,7 +19,7 @@ import numpy as np
 from exactgrasp.errors import DataError, ExactGraspError
 from exactgrasp.geometry.manifold import to_manifold, union
 from exactgrasp.grasp import Grasp
-from exactgrasp.grasp.closing import close_fingers
+from exactgrasp.grasp.closing import close_fingers_result
 
 #: A closed grasp whose hand still overlaps its object by more than this fraction of the hand
 #: volume is not a contact grasp and is skipped.
@@ -187,9 +187,7 @@ def _close(grasp: Grasp) -> tuple[Any, np.ndarray, dict[str, Any]]:
     with warnings.catch_warnings():
         # A back-off is reported in the notes (and the report), not as a warning per record.
         warnings.simplefilter("ignore", UserWarning)
-        result = close_fingers(
-            grasp.hand, grasp.object, object_pose=grasp.object_pose, full_output=True
-        )
+        result = close_fingers_result(grasp.hand, grasp.object, object_pose=grasp.object_pose)
     notes = {
         "backoff_m": float(result.backoff_distance),
         "fingers_in_contact": sum(1 for f in result.fingers if f.contact_links),

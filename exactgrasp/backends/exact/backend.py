@@ -14,7 +14,6 @@ from exactgrasp.backends.base import Backend, check_poses
 from exactgrasp.backends.exact.options import PARAMETERS, check_options
 from exactgrasp.backends.exact.tolerances import RTOL
 from exactgrasp.cache import LRUCache
-from exactgrasp.geometry.bvh import require_engine
 
 if TYPE_CHECKING:
     from exactgrasp.backends.exact.gradients import VolumeGradients
@@ -60,22 +59,21 @@ class ExactBackend(Backend):
         object_cell: float | None = None,
         capacity: int = defaults.EXACT_CAPACITY,
     ):
-        tuning = check_options(
+        self.options = check_options(
             broadphase,
             n_jobs,
             {"hand_cell": hand_cell, "object_cell": object_cell, "capacity": capacity},
             type(self).__name__,
         )
-        if broadphase is not None:
-            require_engine(broadphase, f"the exact backend's {broadphase} broad phase")
-        self.broadphase = broadphase
-        self.n_jobs = None if n_jobs is None else int(n_jobs)
+        self.broadphase = self.options.broadphase
+        self.n_jobs = self.options.n_jobs
         # Provenance records the tuning that differs from the defaults (None cells are left
         # out by `check_options`).
-        if tuning["capacity"] == defaults.EXACT_CAPACITY:
-            del tuning["capacity"]
-        self.tuning = tuning
-        self._cache = LRUCache(self.cache_size)
+        self.tuning = dict(self.options.tuning)
+        if self.tuning["capacity"] == defaults.EXACT_CAPACITY:
+            del self.tuning["capacity"]
+        # Keyed by the grasp's geometry alone: this instance's options are fixed.
+        self._intersectors = LRUCache(self.cache_size)
 
     @property
     def params(self) -> dict[str, Any]:
@@ -84,19 +82,25 @@ class ExactBackend(Backend):
 
     def intersector(self, grasp: Grasp) -> ExactIntersector:
         """The `ExactIntersector` of a grasp, built once per `grasp.geometry_key`."""
+        return self._intersectors.get(
+            grasp.geometry_key,
+            lambda: self.intersector_of(
+                grasp.canonical_hand_links(), grasp.canonical_object_bodies()
+            ),
+        )
+
+    def intersector_of(self, hand_links: list, object_bodies: list) -> ExactIntersector:
+        """A new `ExactIntersector` of meshes with this backend's options (not kept).
+
+        Parameters
+        ----------
+        hand_links, object_bodies : list of (V (n, 3) float64, F (m, 3) int)
+            As `ExactIntersector` takes them.
+        """
         # Here, not above: the class and its parameters load without numba, for ``--help``.
         from exactgrasp.backends.exact.intersector import ExactIntersector
 
-        return self._cache.get(
-            grasp.geometry_key,
-            lambda: ExactIntersector(
-                grasp.canonical_hand_links(),
-                grasp.canonical_object_bodies(),
-                broadphase=self.broadphase,
-                n_jobs=self.n_jobs,
-                **self.tuning,
-            ),
-        )
+        return ExactIntersector(hand_links, object_bodies, options=self.options)
 
     def volumes(self, grasp: Grasp, poses: np.ndarray) -> np.ndarray:
         """Exact volume of hand ∩ moved object per pose, in cubed canonical units."""

@@ -57,8 +57,9 @@ def volume_moments(intersector: ExactIntersector, poses: np.ndarray) -> tuple[np
     Parameters
     ----------
     intersector : ExactIntersector
-    poses : numpy.ndarray, shape (..., 4, 4)
-        Rigid motions of the object (``x -> R x + t``), in the intersector's input frame.
+    poses : numpy.ndarray, shape (..., 4, 4), float64
+        Rigid motions of the object (``x -> R x + t``), in the intersector's input frame, as
+        `exactgrasp.backends.base.check_poses` returns them (not checked again here).
 
     Returns
     -------
@@ -68,7 +69,7 @@ def volume_moments(intersector: ExactIntersector, poses: np.ndarray) -> tuple[np
         Moments in the input frame (area units, then area times length), zero where the
         volume reads 0. ``-links.sum(-2)`` are the object's moments (see `moments`).
     """
-    return intersector.volume_moments(check_poses(poses))
+    return intersector.volume_moments(poses)
 
 
 def boolean_volume_moments(

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.backends import defaults
-from exactgrasp.backends.base import check_poses, repeated_poses, resolve_jobs
+from exactgrasp.backends.base import repeated_poses, resolve_jobs
 from exactgrasp.backends.exact.culling import (
     crossing_poses,
     culled_poses,
@@ -43,7 +43,7 @@ from exactgrasp.backends.exact.culling import (
 from exactgrasp.backends.exact.grids import build_grid, cell_order, morton_order
 from exactgrasp.backends.exact.moment_sums import empty_moment_tables, moment_tables
 from exactgrasp.backends.exact.moments import boolean_moments, face_origins, shift_moments
-from exactgrasp.backends.exact.options import check_options
+from exactgrasp.backends.exact.options import ExactOptions, check_options
 from exactgrasp.backends.exact.pose import pose_volumes
 from exactgrasp.backends.exact.prepare import hand_tables, object_tables, prepare_mesh
 from exactgrasp.backends.exact.reference import Mesh, solids
@@ -67,7 +67,7 @@ from exactgrasp.backends.exact.tolerances import (
     TINY_FACE,
 )
 from exactgrasp.errors import BackendError
-from exactgrasp.geometry.bvh import MeshPair, require_engine
+from exactgrasp.geometry.bvh import MeshPair
 from exactgrasp.geometry.manifold import mesh_arrays, union_solids
 
 #: Largest grid a cell option may ask for (cells per grid): about 1.6 GB of tables.
@@ -157,6 +157,9 @@ class ExactIntersector:
         ``hand_cell`` / ``object_cell`` (grid cell edge, same units as the meshes; default
         1/48 of the mesh's largest extent, about 0.1 canonical units for the Barrett hand),
         ``capacity`` (edge crossings per pose before falling back to a boolean, default 400000).
+    options : ExactOptions, optional
+        The options `options.check_options` already checked (an `ExactBackend`'s), used
+        instead of ``broadphase``, ``n_jobs`` and ``tuning``, not checked again.
 
     Attributes
     ----------
@@ -193,10 +196,14 @@ class ExactIntersector:
         object_bodies: list[Mesh],
         broadphase: str | None = defaults.EXACT_BROADPHASE,
         n_jobs: int | None = defaults.EXACT_N_JOBS,
+        *,
+        options: ExactOptions | None = None,
         **tuning: Any,
     ):
-        tuning = check_options(broadphase, n_jobs, tuning, type(self).__name__)
-        self.n_jobs = None if n_jobs is None else int(n_jobs)
+        if options is None:
+            options = check_options(broadphase, n_jobs, tuning, type(self).__name__)
+        broadphase, tuning = options.broadphase, options.tuning
+        self.n_jobs = options.n_jobs
         # Everything is in local coordinates about the centre of the hand's bounds, the unions
         # too (manifold3d's tolerance grows with the coordinates' magnitude), so that rounding
         # depends on the geometry's size, not on where it lies.
@@ -237,8 +244,6 @@ class ExactIntersector:
         # Surfaces farther apart than this are certainly disjoint whatever the BVH's rounding.
         self.gap = CULL_GAP * scale
         self.feature = f"the exact backend's {broadphase} broad phase"
-        if broadphase is not None:
-            require_engine(broadphase, self.feature)  # refused now, not at the first call
         # Built on first need (`broad_phase`): it costs more than it saves on a few poses.
         self.cull: MeshPair | None = None
         self._cull_lock = threading.Lock()
@@ -358,8 +363,10 @@ class ExactIntersector:
 
         Parameters
         ----------
-        poses : numpy.ndarray, shape (..., 4, 4)
-            Rigid transforms of the object: vertex ``x`` moves to ``R @ x + t``.
+        poses : numpy.ndarray, shape (..., 4, 4), float64
+            Rigid transforms of the object: vertex ``x`` moves to ``R @ x + t``, as
+            `exactgrasp.backends.base.check_poses` returns them. Not checked again here: the
+            public entries (`ExactBackend`'s methods, `exactgrasp.overlap`) check them once.
         progress : callable, optional
             Called in the calling thread with the number of poses finished since its last
             call, as each piece of the work ends (the counts add up to the number of poses).
@@ -396,7 +403,6 @@ class ExactIntersector:
     def _run(self, poses, progress, with_moments):
         """`intersect`'s result, and with ``with_moments`` the link moments (shape
         ``+ (L, 6)``, local coordinates; else ``+ (0, 6)``)."""
-        poses = check_poses(poses)
         t0 = time.perf_counter()
         # The same motions about the local origin c: x -> R x + (R c + t - c); repeats are
         # found there, so that their tolerance scales with the local geometry.

@@ -4,10 +4,12 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 from exactgrasp.backends import defaults
 from exactgrasp.backends.params import Interval, Options, Param, validate_parameters
+from exactgrasp.geometry.bvh import require_engine
 
 BROADPHASES = ("coal", "fcl", None)
 
@@ -44,23 +46,49 @@ PARAMETERS: dict[str, Param] = {
 }
 
 
+@dataclass(frozen=True)
+class ExactOptions:
+    """The exact backend's options, checked (made only by `check_options`).
+
+    Attributes
+    ----------
+    broadphase : {"coal", "fcl", None}
+    n_jobs : int or None
+    tuning : dict
+        ``hand_cell``, ``object_cell`` and ``capacity`` as given, as plain numbers, None cells
+        left out.
+    """
+
+    broadphase: str | None
+    n_jobs: int | None
+    tuning: dict[str, Any]
+
+
 def check_options(
     broadphase: Any, n_jobs: Any, tuning: dict[str, Any], owner: str = "ExactBackend"
-) -> dict[str, Any]:
-    """Check the exact backend's options against `PARAMETERS`.
+) -> ExactOptions:
+    """Check the exact backend's options against `PARAMETERS`, and that the broad phase's
+    library is installed: the one check of them, which `ExactIntersector` built from the result
+    does not repeat.
 
     Returns
     -------
-    dict
-        The tuning options given (``hand_cell``, ``object_cell``, ``capacity``) as plain
-        numbers, None cells left out.
+    ExactOptions
 
     Raises
     ------
     BackendError
         Naming `owner`, the option, the value and what is allowed.
+    MissingDependencyError
+        The library of ``broadphase`` is not installed.
     """
     given = validate_parameters(
         PARAMETERS, {"broadphase": broadphase, "n_jobs": n_jobs, **tuning}, owner
     )
-    return {key: given[key] for key in tuning if given[key] is not None}
+    if broadphase is not None:
+        require_engine(broadphase, f"the exact backend's {broadphase} broad phase")
+    return ExactOptions(
+        broadphase,
+        None if n_jobs is None else int(n_jobs),
+        {key: given[key] for key in tuning if given[key] is not None},
+    )

@@ -4,9 +4,10 @@ The hand becomes an inside/outside grid (`grids`); the object becomes points (`p
 centres of its interior voxels, each standing for a cube of volume ``V_o``, and samples on its
 surface, each standing for ``w_s``. For every pose the points inside the hand are counted
 (`kernel`), on every core (or as many threads as `backends.base.thread_limit` allows, one in
-a batch worker). Grids, points and the hand's volume are kept per process for every backend
-instance. Its own room loads inside the methods: the class and its parameters load without
-numba, for ``--help``.
+a batch worker). Each instance keeps its grids, points and hand volumes, keyed by the
+geometry's content; `exactgrasp.backends.registry.shared_backend` shares one instance per
+parameters in a process. Its own room loads inside the methods: the class and its
+parameters load without numba, for ``--help``.
 """
 
 from __future__ import annotations
@@ -32,25 +33,6 @@ __all__ = ["MAX_RESOLUTION", "SURFACE_SAMPLE_MODES", "SURFACE_WEIGHTS", "VoxelBa
 SURFACE_WEIGHTS = ("paper", "area")
 SURFACE_SAMPLE_MODES = ("generate", "none")
 MAX_RESOLUTION = 1000
-
-# Grids, points and hand volumes shared by every VoxelBackend in the process, keyed by the
-# geometry's hash and the values of the parameters they depend on, named here: a backend is
-# often built per call (`compute_descriptor`), its geometry reused.
-_HAND_GRIDS = LRUCache(defaults.VOXEL_CACHE_SIZE)
-_OBJECT_POINTS = LRUCache(defaults.VOXEL_CACHE_SIZE)
-_HAND_VOLUMES = LRUCache(defaults.VOXEL_CACHE_SIZE)
-#: The parameters the hand's grid depends on (with ``grasp.hand_key``).
-GRID_PARAMETERS = ("hand_resolution", "grid")
-#: The parameters the object's points depend on (with ``grasp.object_key``): every one but
-#: the hand's resolution.
-POINT_PARAMETERS = (
-    "object_resolution",
-    "surface_spacing",
-    "surface_samples",
-    "surface_weight",
-    "seed",
-    "grid",
-)
 
 # Poses per piece at least when progress is reported: a piece takes a fraction of a second,
 # and each starts the kernel's threads anew.
@@ -124,9 +106,9 @@ class VoxelBackend(Backend):
         object_resolution: int = defaults.VOXEL_OBJECT_RESOLUTION,
         surface_spacing: float | None = None,
         surface_samples: int | str | None = None,
-        surface_weight: str = "paper",
-        seed: int = 0,
-        grid: str = "floor",
+        surface_weight: str = defaults.VOXEL_SURFACE_WEIGHT,
+        seed: int = defaults.VOXEL_SEED,
+        grid: str = defaults.VOXEL_GRID_RULE,
     ):
         given = validate_parameters(
             self.parameter_constraints,
@@ -156,6 +138,10 @@ class VoxelBackend(Backend):
         self.surface_weight: str = given["surface_weight"]
         self.seed: int = given["seed"]
         self.grid: str = given["grid"]
+        # This instance's parameters are fixed, so its caches are keyed by content alone.
+        self._hand_grids = LRUCache(defaults.VOXEL_CACHE_SIZE)
+        self._object_points = LRUCache(defaults.VOXEL_CACHE_SIZE)
+        self._hand_volumes = LRUCache(defaults.VOXEL_CACHE_SIZE)
 
     @property
     def params(self) -> dict[str, Any]:
@@ -165,14 +151,13 @@ class VoxelBackend(Backend):
     def hand_grid(self, grasp: Grasp) -> HandOccupancy:
         """The hand's occupancy grid for `grasp`.
 
-        Cached in the process per ``grasp.hand_key`` (the hash of the hand's canonical
-        geometry), hand resolution and grid rule, for every `VoxelBackend`.
+        Cached by this backend per ``grasp.hand_key`` (the hash of the hand's canonical
+        geometry).
         """
         from exactgrasp.backends.voxel import grids  # the kernels compile on first use
 
-        hand_key = getattr(grasp, "hand_key", None)
-        return _HAND_GRIDS.get(
-            None if hand_key is None else (hand_key, *self._values(GRID_PARAMETERS)),
+        return self._hand_grids.get(
+            getattr(grasp, "hand_key", None),
             lambda: grids.hand_occupancy(
                 grasp.canonical_hand_links(), self.hand_resolution, self.grid
             ),
@@ -181,9 +166,8 @@ class VoxelBackend(Backend):
     def object_point_set(self, grasp: Grasp) -> ObjectPoints:
         """The object's points for `grasp`.
 
-        Cached in the process per ``grasp.object_key`` (the hash of the object's canonical
-        geometry and samples) and the parameters that shape the points, for every
-        `VoxelBackend`.
+        Cached by this backend per ``grasp.object_key`` (the hash of the object's canonical
+        geometry and samples).
         """
 
         from exactgrasp.backends.voxel import points
@@ -206,21 +190,15 @@ class VoxelBackend(Backend):
                 grid_rule=self.grid,
             )
 
-        object_key = getattr(grasp, "object_key", None)
-        key = None if object_key is None else (object_key, *self._values(POINT_PARAMETERS))
-        return _OBJECT_POINTS.get(key, build)
-
-    def _values(self, names: tuple[str, ...]) -> tuple:
-        """The values of the parameters ``names``, for a cache key."""
-        return tuple(getattr(self, name) for name in names)
+        return self._object_points.get(getattr(grasp, "object_key", None), build)
 
     def hand_volume(self, grasp: Grasp) -> float:
         """The hand's volume (union of its links), cubed canonical units.
 
-        `Grasp.canonical_hand_volume`, cached in the process per ``grasp.hand_key``: the
+        `Grasp.canonical_hand_volume`, cached by this backend per ``grasp.hand_key``: the
         union of a real hand's links takes longer than the estimate itself.
         """
-        return _HAND_VOLUMES.get(
+        return self._hand_volumes.get(
             getattr(grasp, "hand_key", None), lambda: float(grasp.canonical_hand_volume)
         )
 

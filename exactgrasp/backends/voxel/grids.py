@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from exactgrasp.backends.defaults import VOXEL_GRID_RULES
+from exactgrasp.backends.defaults import VOXEL_GRID_RULE, VOXEL_GRID_RULES
 from exactgrasp.errors import BackendError
 from exactgrasp.geometry.winding import winding_inside_lattice
 
@@ -94,7 +94,7 @@ GRID_RULES = VOXEL_GRID_RULES
 
 
 def grid_layout(
-    lower: np.ndarray, upper: np.ndarray, resolution: int, pad: int, rule: str = "floor"
+    lower: np.ndarray, upper: np.ndarray, resolution: int, pad: int, rule: str = VOXEL_GRID_RULE
 ) -> tuple[np.ndarray, float, tuple[int, int, int]]:
     """Place voxel centres over a bounding box.
 
@@ -147,7 +147,10 @@ def grid_layout(
 
 
 def occupancy_grid(
-    shells: list[tuple[np.ndarray, np.ndarray]], resolution: int, pad: int = 1, rule: str = "floor"
+    shells: list[tuple[np.ndarray, np.ndarray]],
+    resolution: int,
+    pad: int = 1,
+    rule: str = VOXEL_GRID_RULE,
 ) -> Grid:
     """Inside/outside grid of the union of closed shells.
 
@@ -212,7 +215,7 @@ _TABLE_TILES = 128
 
 
 def hand_occupancy(
-    links: list[tuple[np.ndarray, np.ndarray]], resolution: int, rule: str = "floor"
+    links: list[tuple[np.ndarray, np.ndarray]], resolution: int, rule: str = VOXEL_GRID_RULE
 ) -> HandOccupancy:
     """Occupancy grid of the union of a hand's links, padded by one layer of outside nodes.
 

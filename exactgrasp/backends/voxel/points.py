@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from exactgrasp.backends.defaults import VOXEL_GRID_RULE, VOXEL_SEED, VOXEL_SURFACE_WEIGHT
 from exactgrasp.compiling import kernel
 from exactgrasp.errors import BackendError
 
@@ -54,7 +55,9 @@ def surface_area(triangles: np.ndarray) -> float:
     return float(0.5 * np.linalg.norm(cross, axis=1).sum())
 
 
-def poisson_disk_surface(triangles: np.ndarray, spacing: float, seed: int = 0) -> np.ndarray:
+def poisson_disk_surface(
+    triangles: np.ndarray, spacing: float, seed: int = VOXEL_SEED
+) -> np.ndarray:
     """Sample a surface so that no two samples are closer than `spacing`.
 
     Parameters
@@ -236,9 +239,9 @@ def object_points(
     surface_mode: str = "generate",
     surface_count: int | None = None,
     surface_spacing: float | None = None,
-    surface_weight: str = "paper",
-    seed: int = 0,
-    grid_rule: str = "floor",
+    surface_weight: str = VOXEL_SURFACE_WEIGHT,
+    seed: int = VOXEL_SEED,
+    grid_rule: str = VOXEL_GRID_RULE,
 ) -> ObjectPoints:
     """Interior voxel centres and surface samples of an object.
 
