@@ -137,12 +137,14 @@ def segment_moments(segs, ncross, G):
         lk = int(segs[k, 10])
         c = nx * (py * qz - pz * qy) + ny * (pz * qx - px * qz) + nz * (px * qy - py * qx)
         sx, sy, sz = px + qx, py + qy, pz + qz
-        G[lk, 0] += nx * c / 2.0
-        G[lk, 1] += ny * c / 2.0
-        G[lk, 2] += nz * c / 2.0
-        G[lk, 3] += (sy * nz - sz * ny) * c / 6.0
-        G[lk, 4] += (sz * nx - sx * nz) * c / 6.0
-        G[lk, 5] += (sx * ny - sy * nx) * c / 6.0
+        a = c / 2.0
+        b = c / 6.0  # one division a segment, not three
+        G[lk, 0] += nx * a
+        G[lk, 1] += ny * a
+        G[lk, 2] += nz * a
+        G[lk, 3] += (sy * nz - sz * ny) * b
+        G[lk, 4] += (sz * nx - sx * nz) * b
+        G[lk, 5] += (sx * ny - sy * nx) * b
 
 
 @inner(nogil=True, error_model="numpy")
