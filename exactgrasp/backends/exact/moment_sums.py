@@ -13,15 +13,17 @@ Along an edge ``u → v`` the pieces inside are parameter intervals ``[a, b]``; 
 ``f = Σ (b - a)`` and ``h = Σ (b² - a²)`` the edge's share of face ``t1`` (which runs
 ``u → v``) is ``n1 (n1 · w) f / 2`` and ``((2 f u + h (v - u)) × n1)(n1 · w) / 6``,
 ``w = u × v``, and face ``t2`` (which runs ``v → u``) takes the same with ``n2`` and the
-opposite sign. So the derivatives need only the statuses, the crossings and the traced
-segments of the volume's pass (see `moments` for what the moments give).
+opposite sign. That share is ``f`` times the whole edge's (``f = h = 1``, precomputed) plus
+``(0, (h - f)(v - u) × F / 3)``, ``F = n1 (n1 · w) / 2`` the whole edge's first three: a
+crossed edge reads its whole share and its ends, not its faces. So the derivatives need only
+the statuses, the crossings and the traced segments of the volume's pass (see `moments` for
+what the moments give).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from exactgrasp.backends.exact.sums import _order_by_key
 from exactgrasp.backends.exact.tables import MomentTables
 from exactgrasp.compiling import inner
 
@@ -116,71 +118,18 @@ def empty_moment_tables() -> MomentTables:
 
 
 @inner(nogil=True, error_model="numpy")
-def _share(ux, uy, uz, vx, vy, vz, nx, ny, nz, f, h):
-    """The moments (6 scalars) of the inside share (fractions f, h) of edge u -> v on a face
-    with unit normal n that runs u -> v (negate them for the face that runs v -> u).
-    Scalars only: a routine taking arrays would update reference counts per edge."""
-    wx, wy, wz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
-    sx = 2.0 * f * ux + h * (vx - ux)
-    sy = 2.0 * f * uy + h * (vy - uy)
-    sz = 2.0 * f * uz + h * (vz - uz)
-    c = nx * wx + ny * wy + nz * wz
-    a = c * f / 2.0
-    b = c / 6.0
-    return (
-        nx * a,
-        ny * a,
-        nz * a,
-        (sy * nz - sz * ny) * b,
-        (sz * nx - sx * nz) * b,
-        (sx * ny - sy * nx) * b,
-    )
-
-
-@inner(nogil=True, error_model="numpy")
-def _sort_small(x, n):
-    """Insertion sort of x[:n] in place (an edge rarely crosses a surface more than twice)."""
-    for i in range(1, n):
-        y = x[i]
-        j = i
-        while j > 0 and x[j - 1] > y:
-            x[j] = x[j - 1]
-            j -= 1
-        x[j] = y
-
-
-@inner(nogil=True, error_model="numpy")
-def hand_moments(
-    hand_mesh, hand, mom, S, uniform, cnt, rec_e, rec_l, nrec, multi, segs, ncross, G
-):  # fmt: skip
-    """Moments ``(∫ n dA, ∫ x × n dA)`` of each link's boundary inside the object, added to
-    ``G`` (L, 6), local coordinates, after a pose's volume pass.
+def segment_moments(segs, ncross, G):
+    """Stage "segments" of `hand_moments`: the traced segments' pieces, each on its hand face
+    (boundary ``p → q``; its normal and link came with it), added to ``G`` (L, 6).
 
     Parameters
     ----------
-    hand_mesh : tables.MeshTables
-    hand : tables.HandTables
-    mom : tables.MomentTables
-    S : numpy.ndarray, shape (hand n,) int8
-        The hand's vertex statuses (1 inside the object).
-    uniform : numpy.ndarray, shape (parts,) bool
-        The parts classified whole.
-    cnt, rec_e, rec_l, nrec : numpy.ndarray, int
-        The hand edges' crossing counts and records (edge, parameter) and their number.
-    multi : numpy.ndarray, shape (>= nrec,) int64
-        Scratch.
-    segs : numpy.ndarray, shape (>= ncross, 7)
-        The pose's crossing segments (hand face, p, q), `tables.Workspace.segments`.
+    segs : numpy.ndarray, shape (>= ncross, 11)
+        The pose's crossing segments (hand face, p, q, unit normal, link),
+        `tables.Workspace.segments`; length units.
     ncross : int
     G : numpy.ndarray, shape (L, 6)
     """
-    V, E, ET = hand_mesh.vertices, hand_mesh.edges, hand_mesh.edge_faces
-    adj_start, adj_vert, adj_edge = hand_mesh.adj_start, hand_mesh.adj_vertex, hand_mesh.adj_edge
-    reps, planes = hand.parts, hand.planes
-    elink, emom = mom.edge_links, mom.edge_moments
-    vlink, vmom = mom.vertex_link, mom.vertex_moments
-    pstart, plink, pmom = mom.part_start, mom.part_link, mom.part_moments
-    # The segments: hand face t's boundary runs p -> q (its normal and link came with them).
     for k in range(ncross):
         px, py, pz = segs[k, 1], segs[k, 2], segs[k, 3]
         qx, qy, qz = segs[k, 4], segs[k, 5], segs[k, 6]
@@ -188,16 +137,30 @@ def hand_moments(
         lk = int(segs[k, 10])
         c = nx * (py * qz - pz * qy) + ny * (pz * qx - px * qz) + nz * (px * qy - py * qx)
         sx, sy, sz = px + qx, py + qy, pz + qz
-        G[lk, 0] += nx * c / 2.0
-        G[lk, 1] += ny * c / 2.0
-        G[lk, 2] += nz * c / 2.0
-        G[lk, 3] += (sy * nz - sz * ny) * c / 6.0
-        G[lk, 4] += (sz * nx - sx * nz) * c / 6.0
-        G[lk, 5] += (sx * ny - sy * nx) * c / 6.0
-    # Whole edges from every inside vertex to higher-numbered ones, crossed or not (the
-    # crossed ones are corrected below; an uncrossed one from an inside vertex ends inside,
-    # as `sums.edge_sum` checks): summed per part for parts classified whole, per vertex
-    # (or edge by edge at a seam between links) for the others.
+        a = c / 2.0
+        b = c / 6.0  # one division a segment, not three
+        G[lk, 0] += nx * a
+        G[lk, 1] += ny * a
+        G[lk, 2] += nz * a
+        G[lk, 3] += (sy * nz - sz * ny) * b
+        G[lk, 4] += (sz * nx - sx * nz) * b
+        G[lk, 5] += (sx * ny - sy * nx) * b
+
+
+@inner(nogil=True, error_model="numpy")
+def whole_edge_moments(hand_mesh, hand, mom, S, uniform, G):
+    """Stage "whole edges" of `hand_moments`: the whole edges from every inside vertex to
+    higher-numbered ones, crossed or not (`crossed_edge_moments` corrects the crossed ones; an
+    uncrossed one from an inside vertex ends inside, as `sums.edge_sum` checks), added to
+    ``G`` (L, 6): one sum per link for a part classified whole (``uniform``) and inside, one
+    row per inside vertex of the other parts (edge by edge at a seam between links).
+    Arguments as in `hand_moments`.
+    """
+    adj_start, adj_vert, adj_edge = hand_mesh.adj_start, hand_mesh.adj_vertex, hand_mesh.adj_edge
+    reps = hand.parts
+    elink, emom = mom.edge_links, mom.edge_moments
+    vlink, vmom = mom.vertex_link, mom.vertex_moments
+    pstart, plink, pmom = mom.part_start, mom.part_link, mom.part_moments
     for p in range(reps.shape[0] - 1):
         if uniform[p]:
             if S[reps[p, 1]] == 1:
@@ -222,84 +185,142 @@ def hand_moments(
                 for d in range(6):
                     G[l1, d] += emom[e, d]
                     G[l2, d] += emom[e, 6 + d]
-    # Crossed edges: their inside intervals (f, h per crossed edge, in ``fe``, ``ff``,
-    # ``fh``), as `sums.crossed_sum` finds them: the records of edges crossed more than once
-    # gathered in ``multi`` and sorted by edge.
-    fe = np.empty(nrec, np.int64)
-    ff = np.empty(nrec)
-    fh = np.empty(nrec)
-    ne = 0
-    nm = 0
+
+
+@inner(nogil=True, error_model="numpy")
+def _add_interval_share(hand_mesh, mom, e, f, g, G):
+    """Add to ``G`` (L, 6) the share of edge ``e = u → v`` whose inside intervals give
+    ``f = Σ (b - a)`` and ``g = Σ (b² - a²) / 3 - f / 3``, on both its faces: for each face,
+    ``f`` times the whole edge's share ``(F, M)`` (`tables.MomentTables.edge_moments`) plus
+    ``(0, g (v - u) × F)`` (``2 f u + h (v - u) = f (u + v) + (h - f)(v - u)``: the share is
+    linear in ``f`` and ``h``)."""
+    V, E = hand_mesh.vertices, hand_mesh.edges
+    emom = mom.edge_moments
+    u, v = E[e, 0], E[e, 1]
+    dx, dy, dz = V[v, 0] - V[u, 0], V[v, 1] - V[u, 1], V[v, 2] - V[u, 2]
+    for side in range(2):
+        lk = mom.edge_links[e, side]
+        o = 6 * side
+        fx, fy, fz = emom[e, o], emom[e, o + 1], emom[e, o + 2]
+        G[lk, 0] += f * fx
+        G[lk, 1] += f * fy
+        G[lk, 2] += f * fz
+        G[lk, 3] += f * emom[e, o + 3] + g * (dy * fz - dz * fy)
+        G[lk, 4] += f * emom[e, o + 4] + g * (dz * fx - dx * fz)
+        G[lk, 5] += f * emom[e, o + 5] + g * (dx * fy - dy * fx)
+
+
+@inner(nogil=True, error_model="numpy")
+def crossed_edge_moments(hand_mesh, mom, S, cnt, rec_e, rec_l, nrec, chain, G):
+    """Stage "crossed edges" of `hand_moments`: each crossed edge's inside intervals, less the
+    whole edge `whole_edge_moments` added where its lower vertex is inside, added to ``G``
+    (arguments as in `hand_moments`, ``chain`` being its scratch ``multi``).
+
+    An edge crossed once is inside on ``[0, λ]`` or ``[λ, 1]``. The records of an edge crossed
+    more than once are chained through ``chain``, the head's index kept in ``cnt`` (as
+    ``-1 - index``) until `_multi_crossed` walks the chain and puts the count back: linear in
+    the records, and ``cnt`` is as it was on return.
+    """
+    E = hand_mesh.edges
+    chained = 0
     for i in range(nrec):
         e = rec_e[i]
-        if cnt[e] != 1:
-            multi[nm] = i
-            nm += 1
+        c = cnt[e]
+        if c == 1:
+            lam = rec_l[i]
+            # Inside on [0, λ] (less the whole edge) or on [λ, 1]: f = ±(1 - λ), and
+            # (h - f) / 3 = λ f / 3 either way.
+            f = lam - 1.0 if S[E[e, 0]] == 1 else 1.0 - lam
+            _add_interval_share(hand_mesh, mom, e, f, lam * f / 3.0, G)
             continue
-        lam = rec_l[i]
-        fe[ne] = e
-        # Inside from u: [0, lam], less the whole edge the walk above added.
-        if S[E[e, 0]] == 1:
-            ff[ne], fh[ne] = lam - 1.0, lam * lam - 1.0
-        else:
-            ff[ne], fh[ne] = 1.0 - lam, 1.0 - lam * lam
-        ne += 1
-    if nm > 0:
-        key = np.empty(nm, np.int64)
-        for i in range(nm):
-            key[i] = rec_e[multi[i]]
-        order = _order_by_key(key)
-        lams = np.empty(nm)
-        i = 0
-        while i < nm:
-            e = key[order[i]]
-            j = i
-            while j < nm and key[order[j]] == e:
-                lams[j - i] = rec_l[multi[order[j]]]
-                j += 1
-            _sort_small(lams, j - i)
-            inside = S[E[e, 0]] == 1
-            f = 0.0
-            h = 0.0
-            last = 0.0
-            for k in range(j - i):
-                if inside:
-                    f += lams[k] - last
-                    h += lams[k] * lams[k] - last * last
-                last = lams[k]
-                inside = not inside
+        chain[i] = -1 if c > 0 else -1 - c
+        cnt[e] = -1 - i
+        chained += 1
+    if chained > 0:
+        _multi_crossed(hand_mesh, mom, S, cnt, rec_e, rec_l, nrec, chain, chained, G)
+
+
+@inner(nogil=True, error_model="numpy")
+def _multi_crossed(hand_mesh, mom, S, cnt, rec_e, rec_l, nrec, chain, chained, G):
+    """The edges crossed more than once (``chained`` records, chained by
+    `crossed_edge_moments`): each chain's parameters sorted, the edge's inside intervals from
+    its lower vertex's status, and each edge's count put back into ``cnt``."""
+    E = hand_mesh.edges
+    lams = np.empty(chained)
+    for i in range(nrec):
+        e = rec_e[i]
+        if cnt[e] >= 0:
+            continue  # crossed once, or its chain already walked
+        n = 0
+        k = -1 - cnt[e]
+        while k >= 0:
+            lams[n] = rec_l[k]
+            n += 1
+            k = chain[k]
+        cnt[e] = n
+        _sort_small(lams, n)
+        inside = S[E[e, 0]] == 1
+        f = 0.0
+        h = 0.0
+        last = 0.0
+        for k in range(n):
             if inside:
-                f += 1.0 - last
-                h += 1.0 - last * last
-            if S[E[e, 0]] == 1:
-                f -= 1.0
-                h -= 1.0
-            fe[ne], ff[ne], fh[ne] = e, f, h
-            ne += 1
-            i = j
-    for k in range(ne):
-        e = fe[k]
-        u, v = E[e, 0], E[e, 1]
-        ux, uy, uz, vx, vy, vz = V[u, 0], V[u, 1], V[u, 2], V[v, 0], V[v, 1], V[v, 2]
-        t = ET[e, 0]
-        lk = elink[e, 0]
-        a0, a1, a2, a3, a4, a5 = _share(
-            ux, uy, uz, vx, vy, vz, planes[t, 0], planes[t, 1], planes[t, 2], ff[k], fh[k]
-        )
-        G[lk, 0] += a0
-        G[lk, 1] += a1
-        G[lk, 2] += a2
-        G[lk, 3] += a3
-        G[lk, 4] += a4
-        G[lk, 5] += a5
-        t = ET[e, 1]
-        lk = elink[e, 1]
-        a0, a1, a2, a3, a4, a5 = _share(
-            ux, uy, uz, vx, vy, vz, planes[t, 0], planes[t, 1], planes[t, 2], ff[k], fh[k]
-        )
-        G[lk, 0] -= a0
-        G[lk, 1] -= a1
-        G[lk, 2] -= a2
-        G[lk, 3] -= a3
-        G[lk, 4] -= a4
-        G[lk, 5] -= a5
+                f += lams[k] - last
+                h += lams[k] * lams[k] - last * last
+            last = lams[k]
+            inside = not inside
+        if inside:
+            f += 1.0 - last
+            h += 1.0 - last * last
+        if S[E[e, 0]] == 1:
+            f -= 1.0
+            h -= 1.0
+        _add_interval_share(hand_mesh, mom, e, f, (h - f) / 3.0, G)
+
+
+@inner(nogil=True, error_model="numpy")
+def _sort_small(x, n):
+    """Insertion sort of x[:n] in place (an edge rarely crosses a surface more than twice)."""
+    for i in range(1, n):
+        y = x[i]
+        j = i
+        while j > 0 and x[j - 1] > y:
+            x[j] = x[j - 1]
+            j -= 1
+        x[j] = y
+
+
+@inner(nogil=True, error_model="numpy")
+def hand_moments(
+    hand_mesh, hand, mom, S, uniform, cnt, rec_e, rec_l, nrec, multi, segs, ncross, G
+):  # fmt: skip
+    """Moments ``(∫ n dA, ∫ x × n dA)`` of each link's boundary inside the object, added to
+    ``G`` (L, 6), local coordinates, after a pose's volume pass: `segment_moments`,
+    `whole_edge_moments` and `crossed_edge_moments` in turn.
+
+    Parameters
+    ----------
+    hand_mesh : tables.MeshTables
+    hand : tables.HandTables
+    mom : tables.MomentTables
+    S : numpy.ndarray, shape (hand n,) int8
+        The hand's vertex statuses (1 inside the object).
+    uniform : numpy.ndarray, shape (parts,) bool
+        The parts classified whole.
+    cnt : numpy.ndarray, shape (hand e,) int64
+        Crossings recorded per hand edge (`tables.Workspace.hand_count`); written to, and put
+        back.
+    rec_e, rec_l, nrec : numpy.ndarray, numpy.ndarray, int
+        The records' edges and parameters along ``u → v`` (`tables.Crossings`), and their
+        number.
+    multi : numpy.ndarray, shape (>= nrec,) int64
+        Scratch.
+    segs : numpy.ndarray, shape (>= ncross, 11)
+        The pose's crossing segments (hand face, p, q, normal, link),
+        `tables.Workspace.segments`.
+    ncross : int
+    G : numpy.ndarray, shape (L, 6)
+    """
+    segment_moments(segs, ncross, G)
+    whole_edge_moments(hand_mesh, hand, mom, S, uniform, G)
+    crossed_edge_moments(hand_mesh, mom, S, cnt, rec_e, rec_l, nrec, multi, G)
