@@ -11,7 +11,7 @@ import numpy as np
 
 from exactgrasp.backends.exact.cells import cell_index, point_status
 from exactgrasp.backends.exact.predicates import edge_triangle
-from exactgrasp.backends.exact.tables import DEGENERATE, OK
+from exactgrasp.backends.exact.tables import DEGENERATE, OK, PART_FIRST_VERTEX
 from exactgrasp.backends.exact.tolerances import GRID_MARGIN, ROUNDING_PAD
 from exactgrasp.compiling import inner, kernel
 from exactgrasp.geometry.predicates import orient, orient_bound
@@ -39,9 +39,9 @@ def next_unknown(S, start, reps, uniform):
     """The first vertex at or after ``start`` whose status is unknown (-1), or -1. Parts
     classified whole (``uniform``, see `hand_statuses`) are known and skipped."""
     for k in range(reps.shape[0] - 1):
-        if uniform[k] or reps[k + 1, 1] <= start:
+        if uniform[k] or reps[k + 1, PART_FIRST_VERTEX] <= start:
             continue
-        for u in range(max(start, reps[k, 1]), reps[k + 1, 1]):
+        for u in range(max(start, reps[k, PART_FIRST_VERTEX]), reps[k + 1, PART_FIRST_VERTEX]):
             if S[u] == -1:
                 return u
     return -1
@@ -57,7 +57,7 @@ def resolve(S, adj_start, adj_vert, adj_edge, cnt, queue, reps, uniform):
     for p in range(reps.shape[0] - 1):
         if uniform[p]:
             continue
-        for u in range(reps[p, 1], reps[p + 1, 1]):
+        for u in range(reps[p, PART_FIRST_VERTEX], reps[p + 1, PART_FIRST_VERTEX]):
             if S[u] != -1:
                 continue
             for k in range(adj_start[u], adj_start[u + 1]):
@@ -116,7 +116,7 @@ def hand_statuses(S, V, R, t, grid, reps, crossed, whole, uniform, err):
     for k in range(reps.shape[0] - 1):
         each = not (whole and not crossed[k])
         st = -1
-        for i in range(reps[k, 1], reps[k + 1, 1]):
+        for i in range(reps[k, PART_FIRST_VERTEX], reps[k + 1, PART_FIRST_VERTEX]):
             d0, d1, d2 = V[i, 0] - t0, V[i, 1] - t1, V[i, 2] - t2
             x = r00 * d0 + r10 * d1 + r20 * d2
             y = r01 * d0 + r11 * d1 + r21 * d2
@@ -136,7 +136,7 @@ def hand_statuses(S, V, R, t, grid, reps, crossed, whole, uniform, err):
                 break
         uniform[k] = not each and st >= 0
         if not each:
-            for i in range(reps[k, 1], reps[k + 1, 1]):
+            for i in range(reps[k, PART_FIRST_VERTEX], reps[k + 1, PART_FIRST_VERTEX]):
                 S[i] = st
 
 

@@ -9,7 +9,18 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.backends.exact.cells import raster_triangles
-from exactgrasp.backends.exact.tables import LIST_GROUP, CellGrid
+from exactgrasp.backends.exact.tables import (
+    BOX_MAX,
+    BOX_MIN,
+    CELL_AXIS,
+    CELL_BOUNDS_COLUMNS,
+    CELL_BOX_MAX,
+    CELL_BOX_MIN,
+    CELL_SLAB_HIGH,
+    CELL_SLAB_LOW,
+    LIST_GROUP,
+    CellGrid,
+)
 from exactgrasp.backends.exact.tolerances import GRID_MARGIN, LENGTH_FLOOR, NORMAL_FLOOR
 from exactgrasp.geometry.winding import winding_number
 
@@ -243,9 +254,9 @@ def _per_cell(values: np.ndarray, cs: np.ndarray, op, empty: float) -> np.ndarra
 
 
 def cell_patches(grid: CellGrid, AV, AF, AN, ABB) -> np.ndarray:
-    """Per grid cell, bounds of the faces it lists: `tables.CellGrid.bounds`, shape (cells, 11),
-    from the mesh (AV, AF), its normals AN and face boxes ABB (only the grid's frame and lists
-    are read)."""
+    """Per grid cell, bounds of the faces it lists: `tables.CellGrid.bounds`, shape (cells,
+    `CELL_BOUNDS_COLUMNS`), from the mesh (AV, AF), its normals AN and face boxes ABB (only the
+    grid's frame and lists are read)."""
     h, cs, ct = grid.cell, grid.cell_start, grid.cell_faces
     ncell = len(cs) - 1
     cell = np.repeat(np.arange(ncell), np.diff(cs))
@@ -255,13 +266,14 @@ def cell_patches(grid: CellGrid, AV, AF, AN, ABB) -> np.ndarray:
     axis[good] /= norm[good, None]
     axis[~good] = (1.0, 0.0, 0.0)
     proj = np.einsum("qkj,qj->qk", AV[AF[ct]], axis[cell])
-    out = np.zeros((ncell, 11))
-    out[:, :3] = axis
-    out[:, 3] = _per_cell(proj.min(1), cs, np.minimum, np.inf) - GRID_MARGIN * h
-    out[:, 4] = _per_cell(proj.max(1), cs, np.maximum, -np.inf) + GRID_MARGIN * h
-    out[:, 5:8] = _per_cell(ABB[ct, :3], cs, np.minimum, np.inf)
-    out[:, 8:] = _per_cell(ABB[ct, 3:], cs, np.maximum, -np.inf)
+    out = np.zeros((ncell, CELL_BOUNDS_COLUMNS))
+    out[:, CELL_AXIS : CELL_AXIS + 3] = axis
+    out[:, CELL_SLAB_LOW] = _per_cell(proj.min(1), cs, np.minimum, np.inf) - GRID_MARGIN * h
+    out[:, CELL_SLAB_HIGH] = _per_cell(proj.max(1), cs, np.maximum, -np.inf) + GRID_MARGIN * h
+    low, high = ABB[ct, BOX_MIN : BOX_MIN + 3], ABB[ct, BOX_MAX : BOX_MAX + 3]
+    out[:, CELL_BOX_MIN : CELL_BOX_MIN + 3] = _per_cell(low, cs, np.minimum, np.inf)
+    out[:, CELL_BOX_MAX : CELL_BOX_MAX + 3] = _per_cell(high, cs, np.maximum, -np.inf)
     # Clipped to the cell (grown by the kernel's margin): the part of the faces that the
     # cell holds lies in this box, which the search tests each object face against.
-    clip_to_cells(out[:, 5:], cell_corners(grid), h)
+    clip_to_cells(out[:, CELL_BOX_MIN : CELL_BOX_MAX + 3], cell_corners(grid), h)
     return out

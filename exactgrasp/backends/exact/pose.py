@@ -26,6 +26,7 @@ from exactgrasp.backends.exact.tables import (
     COTREE_BLOCK,
     GROW,
     OK,
+    PART_FIRST_VERTEX,
     STAT_CELLS_INSIDE,
     STAT_CELLS_OUTSIDE,
     STAT_CELLS_TOUCHED,
@@ -115,7 +116,7 @@ def _cell_stats(stats, ip, parts, uniform, AS):
     for k in range(nparts):
         if not uniform[k]:
             touched += 1
-        elif AS[parts[k, 1]] == 1:
+        elif AS[parts[k, PART_FIRST_VERTEX]] == 1:
             inside += 1
     stats[ip, STAT_CELLS_TOUCHED] = touched
     stats[ip, STAT_CELLS_INSIDE] = inside
@@ -276,12 +277,8 @@ def pose_volumes(
             W = _workspace(
                 hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows, segs
             )
-            scratch = PoseScratch(
-                scratch.object_V, scratch.object_D, scratch.object_N, scratch.hand_status,
-                scratch.object_status, scratch.uniform, scratch.queue, scratch.multi,
-                scratch.point, scratch.hand_stamp, scratch.object_stamp, scratch.near,
-                scratch.near_cotree, scratch.near_block, scratch.none, W,
-            )  # fmt: skip
+            # The same per-pose arrays around the new search scratch (`work`, the last field).
+            scratch = PoseScratch(*scratch[:-1], W)
         # After the pairs: the parts whose own edges nothing crosses are classified whole.
         code, token = classify_vertices(
             R, t, hand_mesh, hand, object_mesh, obj, hand_grid, object_grid, scratch, code,

@@ -14,6 +14,22 @@ from exactgrasp.backends.exact.tables import (
     CHUNK,
     COTREE_BLOCK,
     COTREE_CHUNK,
+    FACE_ACROSS,
+    FACE_CORNERS,
+    FACE_D,
+    FACE_EDGES,
+    FACE_ERR_COEF,
+    FACE_LINKS_COLUMNS,
+    FACE_OWNS,
+    FACE_RECORD_COLUMNS,
+    FACE_VERTICES,
+    FILTER_COLUMNS,
+    FILTER_NORMAL,
+    FILTER_OFFSET,
+    FILTER_SIDE_COLUMNS,
+    FILTER_SIDE_OFFSET,
+    FILTER_SIDES,
+    PLANE_COLUMNS,
     CellGrid,
     HandTables,
     MeshTables,
@@ -256,18 +272,19 @@ def face_filters(V: np.ndarray, F: np.ndarray, N: np.ndarray, coef: np.ndarray) 
     each face's `search.plane_err_coef`, rounded up to single precision.
 
     Returns (filters (m, 16) float32, filter_err (m,) float32)."""
-    out = np.zeros((len(F), 16))
+    out = np.zeros((len(F), FILTER_COLUMNS))
     norm = np.linalg.norm(N, axis=1)
     unit = np.divide(N, norm[:, None], out=np.zeros_like(N), where=norm[:, None] > 0)
-    out[:, :3] = unit
-    out[:, 3] = np.einsum("ij,ij->i", unit, V[F[:, 0]])
+    out[:, FILTER_NORMAL : FILTER_NORMAL + 3] = unit
+    out[:, FILTER_OFFSET] = np.einsum("ij,ij->i", unit, V[F[:, 0]])
     for k in range(3):
         a, b = V[F[:, k]], V[F[:, (k + 1) % 3]]
         side = np.cross(N, b - a)
         norm = np.linalg.norm(side, axis=1)
         side = np.divide(side, norm[:, None], out=np.zeros_like(side), where=norm[:, None] > 0)
-        out[:, 4 + 4 * k : 7 + 4 * k] = side
-        out[:, 7 + 4 * k] = np.einsum("ij,ij->i", side, a)
+        column = FILTER_SIDES + FILTER_SIDE_COLUMNS * k
+        out[:, column : column + 3] = side
+        out[:, column + FILTER_SIDE_OFFSET] = np.einsum("ij,ij->i", side, a)
     err = coef.astype(np.float32)
     err[err < coef] = np.nextafter(err, np.float32(np.inf))[err < coef]
     return np.ascontiguousarray(out.astype(np.float32)), np.ascontiguousarray(err)
@@ -299,18 +316,18 @@ def hand_tables(mesh: MeshTables, grid: CellGrid, tiny: float) -> tuple[MeshTabl
     long = np.abs(ends[:, 1] - ends[:, 0]).max(1) > grid.cell
     order = morton_order(ends.mean(1))
     cotree = cotree[order[np.argsort(long[order], kind="stable")]]
-    filters, filter_err = face_filters(AV, AF, AN, AP[:, 4])
-    records = np.zeros((len(AF), 24))
-    records[:, :6] = AP
-    records[:, 6:15] = AV[AF].reshape(-1, 9)
-    records[:, 15:18] = AD
+    filters, filter_err = face_filters(AV, AF, AN, AP[:, FACE_ERR_COEF])
+    records = np.zeros((len(AF), FACE_RECORD_COLUMNS))
+    records[:, :PLANE_COLUMNS] = AP
+    records[:, FACE_CORNERS : FACE_CORNERS + 9] = AV[AF].reshape(-1, 9)
+    records[:, FACE_D : FACE_D + 3] = AD
     ET = mesh.edge_faces[mesh.face_edges]
     across = np.where(ET[:, :, 0] == np.arange(len(AF))[:, None], ET[:, :, 1], ET[:, :, 0])
-    links = np.zeros((len(AF), 16), np.int32)
-    links[:, :3] = AF
-    links[:, 3:6] = mesh.face_edges
-    links[:, 6:9] = across
-    links[:, 9:12] = mesh.face_owns
+    links = np.zeros((len(AF), FACE_LINKS_COLUMNS), np.int32)
+    links[:, FACE_VERTICES : FACE_VERTICES + 3] = AF
+    links[:, FACE_EDGES : FACE_EDGES + 3] = mesh.face_edges
+    links[:, FACE_ACROSS : FACE_ACROSS + 3] = across
+    links[:, FACE_OWNS : FACE_OWNS + 3] = mesh.face_owns
     tables = HandTables(
         D=AD,
         normals=AN,

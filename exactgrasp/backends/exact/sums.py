@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from exactgrasp.backends.exact.tables import DEGENERATE, OK
+from exactgrasp.backends.exact.tables import DEGENERATE, OK, PART_FIRST_VERTEX, WEIGHT, WEIGHT_ERR
 from exactgrasp.backends.exact.tolerances import BOUND_SLACK, TERM_ERR, U
 from exactgrasp.compiling import inner, kernel
 
@@ -95,9 +95,9 @@ def edge_sum(
     inside vertices are visited (an edge between two outside vertices adds nothing and is
     consistent), which checks every uncrossed edge. A part classified whole (``uniform``,
     see `classify.hand_statuses`) that is inside adds its own edges' summed weight
-    ``wsum[p, 0]`` (error bound ``wsum[p, 1]``; they are uncrossed and consistent) and visits
-    only its vertices' edges to other parts, which come first in each vertex's adjacency, up to
-    ``adj_split[u]``.
+    ``wsum[p, WEIGHT]`` (error bound ``wsum[p, WEIGHT_ERR]``; they are uncrossed and
+    consistent) and visits only its vertices' edges to other parts, which come first in each
+    vertex's adjacency, up to ``adj_split[u]``.
     """
     have = Wpre.shape[0] > 0
     total = 0.0
@@ -106,12 +106,12 @@ def edge_sum(
     for p in range(reps.shape[0] - 1):
         whole = uniform[p]
         if whole:
-            if S[reps[p, 1]] != 1:
+            if S[reps[p, PART_FIRST_VERTEX]] != 1:
                 continue
-            total += wsum[p, 0]
-            err += wsum[p, 1]
+            total += wsum[p, WEIGHT]
+            err += wsum[p, WEIGHT_ERR]
             run += abs(total)
-        for u in range(reps[p, 1], reps[p + 1, 1]):
+        for u in range(reps[p, PART_FIRST_VERTEX], reps[p + 1, PART_FIRST_VERTEX]):
             if S[u] != 1:
                 continue
             for k in range(adj_start[u], adj_split[u] if whole else adj_start[u + 1]):
@@ -123,8 +123,8 @@ def edge_sum(
                     return 0.0, 0.0, False
                 if u < w:
                     if have:
-                        total += Wpre[e, 0]
-                        err += Wpre[e, 1]
+                        total += Wpre[e, WEIGHT]
+                        err += Wpre[e, WEIGHT_ERR]
                     else:
                         we, ee = edge_weight(V, D, E, ET, e, Dcoef, g)
                         total += we
@@ -202,7 +202,7 @@ def crossed_sum(
         # The branch here, not in a routine taking the arrays: that would cost atomic
         # reference-count updates per record.
         if have:
-            we, ee = Wpre[e, 0], Wpre[e, 1]
+            we, ee = Wpre[e, WEIGHT], Wpre[e, WEIGHT_ERR]
         else:
             we, ee = edge_weight(V, D, E, ET, e, Dcoef, g)
         total += frac * we
@@ -245,7 +245,7 @@ def crossed_sum(
         # The branch here, not in a routine taking the arrays: that would cost atomic
         # reference-count updates per record.
         if have:
-            we, ee = Wpre[e, 0], Wpre[e, 1]
+            we, ee = Wpre[e, WEIGHT], Wpre[e, WEIGHT_ERR]
         else:
             we, ee = edge_weight(V, D, E, ET, e, Dcoef, g)
         total += frac * we

@@ -61,6 +61,17 @@ class MeshTables(NamedTuple):
     adj_edge: np.ndarray
 
 
+#: Columns of a box row (`CellGrid.boxes`, ``groups``, `HandTables.boxes`): its lower corner
+#: (3: x, y, z) from `BOX_MIN`, its upper corner (3) from `BOX_MAX`.
+BOX_MIN, BOX_MAX = 0, 3
+#: Columns of a cell's bounds row (`CellGrid.bounds`, 11): the unit axis (3) from `CELL_AXIS`,
+#: the faces' extent along it from `CELL_SLAB_LOW` to `CELL_SLAB_HIGH`, their clipped common
+#: box's lower corner (3) from `CELL_BOX_MIN` and upper corner (3) from `CELL_BOX_MAX`.
+CELL_AXIS, CELL_SLAB_LOW, CELL_SLAB_HIGH, CELL_BOX_MIN, CELL_BOX_MAX = 0, 3, 4, 5, 8
+#: Columns of `CellGrid.bounds`.
+CELL_BOUNDS_COLUMNS = 11
+
+
 class CellGrid(NamedTuple):
     """A grid of cubic cells over a closed mesh, one cell of padding on every side
     (`grids.build_grid`). Cells are flat-indexed ``(i * shape[1] + j) * shape[2] + k``."""
@@ -81,21 +92,58 @@ class CellGrid(NamedTuple):
     #: ((shape + 1).prod(),) int64: summed-volume table of the surface cells, flat, so that a
     #: box of cells' count takes 8 reads (`cells.surface_cells_in`).
     surface_table: np.ndarray
-    #: (listed, 6) float32: the listed faces' bounding boxes, in the order of `cell_faces`, each
-    #: clipped to its cell (grown by `GRID_MARGIN`, rounded outwards): a crossing in that cell
-    #: lies in that box.
+    #: (listed, 6) float32 (`BOX_MIN`, `BOX_MAX`): the listed faces' bounding boxes, in the order
+    #: of `cell_faces`, each clipped to its cell (grown by `GRID_MARGIN`, rounded outwards): a
+    #: crossing in that cell lies in that box.
     boxes: np.ndarray
     #: (cells + 1,) int64: CSR start of each cell's groups in `groups`; group k of cell c holds
     #: its list's entries ``cell_start[c] + LIST_GROUP * (k - group_start[c])`` onwards (at most
     #: `LIST_GROUP`, up to the cell's end).
     group_start: np.ndarray
-    #: (groups, 6) float32: the common box of each group of `boxes` (rounded outwards).
+    #: (groups, 6) float32: the common box of each group of `boxes` (rounded outwards; columns
+    #: `BOX_MIN`, `BOX_MAX`).
     groups: np.ndarray
-    #: (cells, 11) float64: per cell, a unit axis (its faces' area-weighted mean normal), their
-    #: extent along it (min, max; widened by `GRID_MARGIN`) and their common bounding box clipped
-    #: to the cell (min xyz, max xyz): what the cell holds of the surface lies in that slab and
-    #: box (`grids.cell_patches`).
+    #: (cells, `CELL_BOUNDS_COLUMNS`) float64: per cell (columns `CELL_AXIS` ...), a unit axis (its
+    #: faces' area-weighted mean normal), their extent along it (min, max; widened by
+    #: `GRID_MARGIN`) and their common bounding box clipped to the cell (min xyz, max xyz): what
+    #: the cell holds of the surface lies in that slab and box (`grids.cell_patches`).
     bounds: np.ndarray
+
+
+#: Columns of a face's plane (`HandTables.planes`, the first `PLANE_COLUMNS` of
+#: `HandTables.face_records`): the unit normal (3) from `FACE_NORMAL`, the plane's offset
+#: ``n · a`` (`FACE_OFFSET`), `search.plane_err_coef` of its conditioning times the coordinate
+#: bound (`FACE_ERR_COEF`), what its rounded ``D`` can cost (`FACE_D_COST`, volume units).
+FACE_NORMAL, FACE_OFFSET, FACE_ERR_COEF, FACE_D_COST = 0, 3, 4, 5
+PLANE_COLUMNS = 6
+#: Further columns of a face's record (`HandTables.face_records`, `FACE_RECORD_COLUMNS`):
+#: corner k's coordinates (3) from ``FACE_CORNERS + 3 k``, ``D`` (3) from `FACE_D`, the link
+#: the face comes from (`FACE_LINK`, as a float; `MomentTables.face_link`), then zeros.
+FACE_CORNERS, FACE_D, FACE_LINK = 6, 15, 18
+FACE_RECORD_COLUMNS = 24
+#: Columns of a face's links (`HandTables.face_links`, int32, `FACE_LINKS_COLUMNS`): per
+#: corner k, its vertex at ``FACE_VERTICES + k``, the edge k -> k + 1 at ``FACE_EDGES + k``,
+#: the face across that edge at ``FACE_ACROSS + k``, whether the face owns that edge (1) or
+#: not (0) at ``FACE_OWNS + k``; then zeros.
+FACE_VERTICES, FACE_EDGES, FACE_ACROSS, FACE_OWNS = 0, 3, 6, 9
+FACE_LINKS_COLUMNS = 16
+#: Columns of a face's filter row (`HandTables.filters`, `ObjectTables.filters`, float32,
+#: `FILTER_COLUMNS`): the unit normal (3) from `FILTER_NORMAL` and the plane's offset
+#: (`FILTER_OFFSET`), then per corner k, from ``FILTER_SIDES + FILTER_SIDE_COLUMNS k``, the
+#: unit normal (3) of its edge k -> k + 1 in the face's plane, pointing into the face, and that
+#: edge's offset (at ``+ FILTER_SIDE_OFFSET``).
+FILTER_NORMAL, FILTER_OFFSET, FILTER_SIDES = 0, 3, 4
+FILTER_SIDE_COLUMNS, FILTER_SIDE_OFFSET = 4, 3
+FILTER_COLUMNS = 16
+#: Columns of a bounding sphere (`HandTables.cotree_runs`, ``cotree_blocks``,
+#: `ObjectTables.edge_runs`): the centre (3) from `SPHERE_CENTRE`, the radius (`SPHERE_RADIUS`).
+SPHERE_CENTRE, SPHERE_RADIUS = 0, 3
+#: Columns of a part row (`HandTables.parts`): its flat cell index (`PART_CELL`) and first
+#: vertex (`PART_FIRST_VERTEX`).
+PART_CELL, PART_FIRST_VERTEX = 0, 1
+#: Columns of a weight row (`HandTables.edge_weights`, ``part_weights``): the weight
+#: (`WEIGHT`) and a bound on its error (`WEIGHT_ERR`), volume units.
+WEIGHT, WEIGHT_ERR = 0, 1
 
 
 class HandTables(NamedTuple):
@@ -109,18 +157,19 @@ class HandTables(NamedTuple):
     D: np.ndarray
     #: (m, 3) float64: the normals ``(b - a) × (c - a)`` as the kernels compute them (area units).
     normals: np.ndarray
-    #: (m, 6) float64: each face's bounding box (min xyz, max xyz).
+    #: (m, 6) float64: each face's bounding box (columns `BOX_MIN`, `BOX_MAX`).
     boxes: np.ndarray
-    #: (m, 6) float64: unit normal (3), plane offset, `search.plane_err_coef` of its conditioning
-    #: (times the coordinate bound: a plane distance's error), what its rounded ``D`` can cost
-    #: (absolute, volume units).
+    #: (m, `PLANE_COLUMNS`) float64: unit normal (3), plane offset, `search.plane_err_coef` of
+    #: its conditioning (times the coordinate bound: a plane distance's error), what its rounded
+    #: ``D`` can cost (absolute, volume units); columns `FACE_NORMAL` to `FACE_D_COST`.
     planes: np.ndarray
     #: (parts + 1, 2) int64: per part its flat cell index and first vertex. A part is a piece of
     #: the surface in one cell: the vertices of one hand-grid cell joined by edges inside it.
     #: The vertices being numbered part by part (cell by cell), part k holds vertices
     #: ``parts[k, 1]`` to ``parts[k + 1, 1] - 1``. The last row is (-1, number of vertices).
+    #: Columns `PART_CELL`, `PART_FIRST_VERTEX`.
     parts: np.ndarray
-    #: (e, 2) float64: ``W_e`` and a bound on its error (volume units).
+    #: (e, 2) float64: ``W_e`` and a bound on its error (volume units; `WEIGHT`, `WEIGHT_ERR`).
     edge_weights: np.ndarray
     #: (e,) int64: the part of each edge, -1 where its ends lie in two parts.
     edge_part: np.ndarray
@@ -135,22 +184,25 @@ class HandTables(NamedTuple):
     #: (k,) int64: the co-tree edges (`prepare.cotree_edges`), in runs of `COTREE_CHUNK` close
     #: together.
     cotree: np.ndarray
-    #: (runs, 4) float64: bounding sphere (centre, radius) of each run of `cotree`.
+    #: (runs, 4) float64: bounding sphere (`SPHERE_CENTRE`, `SPHERE_RADIUS`) of each run of
+    #: `cotree`.
     cotree_runs: np.ndarray
     #: (blocks, 4) float64: bounding sphere of each block of `COTREE_BLOCK` runs.
     cotree_blocks: np.ndarray
-    #: (m, 16) float32: per face its unit normal and plane offset, then per corner k the unit
-    #: normal of its edge k -> k + 1 in the face's plane, pointing into the face, and its offset
-    #: (`prepare.face_filters`): what the seeds' filters read, one cache line per face.
+    #: (m, `FILTER_COLUMNS`) float32: per face its unit normal and plane offset, then per corner k
+    #: the unit normal of its edge k -> k + 1 in the face's plane, pointing into the face, and its
+    #: offset (`prepare.face_filters`): what the seeds' filters read, one cache line per face.
     filters: np.ndarray
     #: (m,) float32: `search.plane_err_coef` of each face (rounded up).
     filter_err: np.ndarray
-    #: (m, 24) float64: per face, what the pair evaluation reads (`search.trace_pairs`) in three
-    #: cache lines: `planes` (6), its corners' coordinates (9), ``D`` (3), the index of the
-    #: link it comes from (`MomentTables.face_link`, set with them), five zeros.
+    #: (m, `FACE_RECORD_COLUMNS`) float64: per face, what the pair evaluation reads
+    #: (`search.trace_pairs`) in three cache lines: `planes` (6), its corners' coordinates (9),
+    #: ``D`` (3), the index of the link it comes from (`MomentTables.face_link`, set with them),
+    #: five zeros.
     face_records: np.ndarray
-    #: (m, 16) int32: per face its vertices (3), the edges of its corners k -> k + 1 (3), the
-    #: faces across those edges (3), whether it owns those edges (3, 0 or 1), four zeros.
+    #: (m, `FACE_LINKS_COLUMNS`) int32: per face its vertices (3), the edges of its corners k -> k
+    #: + 1 (3), the faces across those edges (3), whether it owns those edges (3, 0 or 1), four
+    #: zeros.
     face_links: np.ndarray
 
 
@@ -162,7 +214,8 @@ class ObjectTables(NamedTuple):
 
     #: (e,) int64: the edges in runs of `CHUNK` close together.
     edge_order: np.ndarray
-    #: (runs, 4) float64: bounding sphere (centre, radius) of each run of `edge_order`.
+    #: (runs, 4) float64: bounding sphere (`SPHERE_CENTRE`, `SPHERE_RADIUS`) of each run of
+    #: `edge_order`.
     edge_runs: np.ndarray
     #: (m, 16) float32: the faces' planes and edge normals in the object's frame (as
     #: `HandTables.filters`).
@@ -187,6 +240,14 @@ class ObjectTables(NamedTuple):
     part_weights: np.ndarray
 
 
+#: Columns of a row of moments (`MomentTables`): ``∫ n dA`` (3) from `MOMENT_FORCE`, then
+#: ``∫ x × n dA`` (3) from `MOMENT_TORQUE`; `MOMENT_COLUMNS` in all.
+MOMENT_FORCE, MOMENT_TORQUE, MOMENT_COLUMNS = 0, 3, 6
+#: Columns of `MomentTables.edge_moments`: the whole edge's share of ``t1``'s moments from
+#: `EDGE_MOMENTS_T1`, of ``t2``'s from `EDGE_MOMENTS_T2` (`MOMENT_COLUMNS` each).
+EDGE_MOMENTS_T1, EDGE_MOMENTS_T2 = 0, 6
+
+
 class MomentTables(NamedTuple):
     """What the volume's derivatives read of the fixed hand (`moment_sums.moment_tables`):
     which link each face comes from, and the moments of whole edges and parts. Empty (no
@@ -200,7 +261,8 @@ class MomentTables(NamedTuple):
     face_link: np.ndarray
     #: (e, 2) int64: the links of each edge's faces ``t1`` and ``t2``.
     edge_links: np.ndarray
-    #: (e, 12) float64: the whole edge's share of ``t1``'s moments (6), then of ``t2``'s (6).
+    #: (e, 12) float64: the whole edge's share of ``t1``'s moments (6), then of ``t2``'s (6):
+    #: `EDGE_MOMENTS_T1`, `EDGE_MOMENTS_T2`.
     edge_moments: np.ndarray
     #: (n,) int64: the one link of the faces around each vertex, -1 where they come from
     #: several (a seam between links).
@@ -229,6 +291,22 @@ class Crossings(NamedTuple):
     err: np.ndarray
 
 
+#: Columns of a crossing point (`Workspace.points`, 7): its coordinates (3) from `POINT_XYZ`,
+#: their error bound (`POINT_ERR`), 1.0 where it starts the common segment, else 0.0
+#: (`POINT_STARTS`), the mesh of the crossed edge, 0 hand or 1 object (`POINT_MESH`), and the
+#: face corner k of that edge k -> k + 1 (`POINT_CORNER`).
+POINT_XYZ, POINT_ERR, POINT_STARTS, POINT_MESH, POINT_CORNER = 0, 3, 4, 5, 6
+POINT_COLUMNS = 7
+#: Column of `Workspace.dists` holding its row's error bound (the corners' distances come
+#: first, one per corner).
+DIST_ERR = 3
+#: Columns of a traced segment (`Workspace.segments`, `SEGMENT_COLUMNS`): its hand face
+#: (`SEGMENT_FACE`), its start p (3) from `SEGMENT_P`, its end q (3) from `SEGMENT_Q`, the hand
+#: face's unit normal (3) from `SEGMENT_NORMAL` and link (`SEGMENT_LINK`).
+SEGMENT_FACE, SEGMENT_P, SEGMENT_Q, SEGMENT_NORMAL, SEGMENT_LINK = 0, 1, 4, 7, 10
+SEGMENT_COLUMNS = 11
+
+
 class Workspace(NamedTuple):
     """Scratch arrays of the face search and the pair tests, reused from pose to pose."""
 
@@ -250,12 +328,13 @@ class Workspace(NamedTuple):
     pair_tags: np.ndarray
     #: (capacity, 2) int64: candidate pairs (hand face, object face) from the seeds.
     seeds: np.ndarray
-    #: (2, 7) float64: crossing points of a pair: coordinates, error bound, whether it starts
-    #: the common segment, the mesh of the crossed edge (0 hand, 1 object) and its face corner.
+    #: (2, `POINT_COLUMNS`) float64: crossing points of a pair (columns `POINT_XYZ` ...):
+    #: coordinates, error bound, whether it starts the common segment, the mesh of the crossed edge
+    #: (0 hand, 1 object) and its face corner.
     points: np.ndarray
     #: (2, 3) int64: certain signs of each face's corners against the other's plane (0: none).
     signs: np.ndarray
-    #: (2, 4) float64: those corners' signed distances and the row's error bound.
+    #: (2, 4) float64: those corners' signed distances and the row's error bound (`DIST_ERR`).
     dists: np.ndarray
     #: (3, 2) int64: a box of grid cells (inclusive index ranges per axis).
     cell_range: np.ndarray
@@ -264,10 +343,10 @@ class Workspace(NamedTuple):
     #: (longest cell list of either grid,) int64: the listed faces of a cell that pass the box
     #: filters.
     survivors: np.ndarray
-    #: (pair table size, 11) float64, or (0, 11) for volumes only: per crossing pair of the
-    #: pose, in the order traced, its
-    #: hand face, its segment's ends p, q (directed along ``n_t × n_s``), the hand face's unit
-    #: normal and link: what the volume's derivatives integrate over (`moment_sums`).
+    #: (pair table size, `SEGMENT_COLUMNS`) float64, or (0, `SEGMENT_COLUMNS`) for volumes only:
+    #: per crossing pair of the pose, in the order traced, its hand face, its segment's ends p, q
+    #: (directed along ``n_t × n_s``), the hand face's unit normal and link: what the volume's
+    #: derivatives integrate over (`moment_sums`).
     segments: np.ndarray
 
 
