@@ -13,7 +13,33 @@ import numpy as np
 
 from exactgrasp.backends.exact.pairs import corner_crossing, pair, segment_term
 from exactgrasp.backends.exact.predicates import CROSS, sign
-from exactgrasp.backends.exact.tables import DEGENERATE, GROW, OK, OVERFLOW
+from exactgrasp.backends.exact.tables import (
+    DEGENERATE,
+    DIST_ERR,
+    FACE_ACROSS,
+    FACE_CORNERS,
+    FACE_D,
+    FACE_D_COST,
+    FACE_EDGES,
+    FACE_ERR_COEF,
+    FACE_LINK,
+    FACE_NORMAL,
+    FACE_OFFSET,
+    FACE_OWNS,
+    FACE_VERTICES,
+    GROW,
+    OK,
+    OVERFLOW,
+    POINT_CORNER,
+    POINT_MESH,
+    POINT_STARTS,
+    POINT_XYZ,
+    SEGMENT_FACE,
+    SEGMENT_LINK,
+    SEGMENT_NORMAL,
+    SEGMENT_P,
+    SEGMENT_Q,
+)
 from exactgrasp.backends.exact.tolerances import (
     GRID_MARGIN,
     KAPPA_MAX,
@@ -74,6 +100,23 @@ def _on_line(x0, x1, x2, d0, d1, d2, k, span, err, rho):
     # The exact point's projection is xk + lam* (xi - xk) with |lam - lam*| <= 4 err ri
     # (`param_err`), so a errs by span times that, plus the rounding of the projections.
     return a, b, span * (4.0 * err * max(ri, rj) + PARAM_ROUNDING) + rho
+
+
+@inner(nogil=True, error_model="numpy")
+def _line_ends(corners, d, direction, span, err, rho):
+    """Where a face (corners (3, each (x, y, z)), signed distances ``d`` (3) to the other
+    plane, erring by up to ``err``) crosses that plane, projected on ``direction``: its lone
+    vertex k (`_lone`), then `_on_line`'s a, b and error bound. Scalars only."""
+    (ax, ay, az), (bx, by, bz), (cx, cy, cz) = corners
+    Dx, Dy, Dz = direction
+    k = _lone(d[0], d[1], d[2])
+    a, b, e = _on_line(
+        Dx * ax + Dy * ay + Dz * az,
+        Dx * bx + Dy * by + Dz * bz,
+        Dx * cx + Dy * cy + Dz * cz,
+        d[0], d[1], d[2], k, span, err, rho,
+    )  # fmt: skip
+    return k, a, b, e
 
 
 @inner(nogil=True, error_model="numpy")
@@ -151,8 +194,13 @@ def trace_pairs(
     smin0 = smin1 = smin2 = smax0 = smax1 = smax2 = 0.0
     nx = ny = nz = sd = eps_s = tol_e = beta_s = 0.0
     px = py = pz = qx = qy = qz = 0.0
+    s_corners = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
     segs = W.segments
     keep = segs.shape[0] > 0
+    # What the exact `pair` reads, in tuples of exactly those arrays.
+    hand_side = (AF, ATE, ATO, AV, AD, acnt, arec)
+    object_side = (BF, BTE, BTO, BV, BD, bcnt, brec)
+    scratch = (nrec, P, sg, dt)
     for k in range(nseeds):
         ft, s = seeds[k, 0], seeds[k, 1]
         chained = False
@@ -195,14 +243,32 @@ def trace_pairs(
                 beta_s = Bdc[s] * gb
                 nx, ny, nz = BN[s, 0] * inv, BN[s, 1] * inv, BN[s, 2] * inv
                 sd = nx * sa0 + ny * sa1 + nz * sa2
+                s_corners = ((sa0, sa1, sa2), (sb0, sb1, sb2), (sc0, sc1, sc2))
             # Both faces against the other's plane in floating point, with a tolerance far
             # above rounding; the exact tests follow in `pair`.
             # The hand face's record (`HandTables.face_records`, ``face_links``): a few cache
             # lines instead of one per array and vertex.
-            v0, v1, v2 = HI[ft, 0], HI[ft, 1], HI[ft, 2]
-            t0x, t0y, t0z = HF[ft, 6], HF[ft, 7], HF[ft, 8]
-            t1x, t1y, t1z = HF[ft, 9], HF[ft, 10], HF[ft, 11]
-            t2x, t2y, t2z = HF[ft, 12], HF[ft, 13], HF[ft, 14]
+            v0, v1, v2 = (
+                HI[ft, FACE_VERTICES],
+                HI[ft, FACE_VERTICES + 1],
+                HI[ft, FACE_VERTICES + 2],
+            )
+            t0x, t0y, t0z = (
+                HF[ft, FACE_CORNERS],
+                HF[ft, FACE_CORNERS + 1],
+                HF[ft, FACE_CORNERS + 2],
+            )
+            t1x, t1y, t1z = (
+                HF[ft, FACE_CORNERS + 3],
+                HF[ft, FACE_CORNERS + 4],
+                HF[ft, FACE_CORNERS + 5],
+            )
+            t2x, t2y, t2z = (
+                HF[ft, FACE_CORNERS + 6],
+                HF[ft, FACE_CORNERS + 7],
+                HF[ft, FACE_CORNERS + 8],
+            )
+            t_corners = ((t0x, t0y, t0z), (t1x, t1y, t1z), (t2x, t2y, t2z))
             e0 = t0x * nx + t0y * ny + t0z * nz - sd
             e1 = t1x * nx + t1y * ny + t1z * nz - sd
             e2 = t2x * nx + t2y * ny + t2z * nz - sd
@@ -215,10 +281,25 @@ def trace_pairs(
                 (e0 < -tol_e) & (e1 < -tol_e) & (e2 < -tol_e)
             )
             if not apart:
-                f0 = sa0 * HF[ft, 0] + sa1 * HF[ft, 1] + sa2 * HF[ft, 2] - HF[ft, 3]
-                f1 = sb0 * HF[ft, 0] + sb1 * HF[ft, 1] + sb2 * HF[ft, 2] - HF[ft, 3]
-                f2 = sc0 * HF[ft, 0] + sc1 * HF[ft, 1] + sc2 * HF[ft, 2] - HF[ft, 3]
-                eps_t = HF[ft, 4] * gscale
+                f0 = (
+                    sa0 * HF[ft, FACE_NORMAL]
+                    + sa1 * HF[ft, FACE_NORMAL + 1]
+                    + sa2 * HF[ft, FACE_NORMAL + 2]
+                    - HF[ft, FACE_OFFSET]
+                )
+                f1 = (
+                    sb0 * HF[ft, FACE_NORMAL]
+                    + sb1 * HF[ft, FACE_NORMAL + 1]
+                    + sb2 * HF[ft, FACE_NORMAL + 2]
+                    - HF[ft, FACE_OFFSET]
+                )
+                f2 = (
+                    sc0 * HF[ft, FACE_NORMAL]
+                    + sc1 * HF[ft, FACE_NORMAL + 1]
+                    + sc2 * HF[ft, FACE_NORMAL + 2]
+                    - HF[ft, FACE_OFFSET]
+                )
+                eps_t = HF[ft, FACE_ERR_COEF] * gscale
                 tol_f = max(ptol, 2.0 * eps_t)
                 apart = ((f0 > tol_f) & (f1 > tol_f) & (f2 > tol_f)) | (
                     (f0 < -tol_f) & (f1 < -tol_f) & (f2 < -tol_f)
@@ -234,7 +315,11 @@ def trace_pairs(
                     min(abs(f0), abs(f1), abs(f2)) > tol_f
                 )
                 if sided:
-                    ux, uy, uz = HF[ft, 0], HF[ft, 1], HF[ft, 2]
+                    ux, uy, uz = (
+                        HF[ft, FACE_NORMAL],
+                        HF[ft, FACE_NORMAL + 1],
+                        HF[ft, FACE_NORMAL + 2],
+                    )
                     Dx = uy * nz - uz * ny
                     Dy = uz * nx - ux * nz
                     Dz = ux * ny - uy * nx
@@ -249,20 +334,9 @@ def trace_pairs(
                     dnorm = abs(Dx) + abs(Dy) + abs(Dz)
                     span = ext * dnorm
                     rho = LINE_ROUNDING * U * dnorm * gscale
-                    kt = _lone(e0, e1, e2)
-                    at, bt, errt = _on_line(
-                        Dx * t0x + Dy * t0y + Dz * t0z,
-                        Dx * t1x + Dy * t1y + Dz * t1z,
-                        Dx * t2x + Dy * t2y + Dz * t2z,
-                        e0, e1, e2, kt, span, eps_s, rho,
-                    )  # fmt: skip
-                    ks = _lone(f0, f1, f2)
-                    as_, bs, errs = _on_line(
-                        Dx * sa0 + Dy * sa1 + Dz * sa2,
-                        Dx * sb0 + Dy * sb1 + Dz * sb2,
-                        Dx * sc0 + Dy * sc1 + Dz * sc2,
-                        f0, f1, f2, ks, span, eps_t, rho,
-                    )  # fmt: skip
+                    D = (Dx, Dy, Dz)
+                    kt, at, bt, errt = _line_ends(t_corners, (e0, e1, e2), D, span, eps_s, rho)
+                    ks, as_, bs, errs = _line_ends(s_corners, (f0, f1, f2), D, span, eps_t, rho)
                     lot, hit = min(at, bt), max(at, bt)
                     los, his = min(as_, bs), max(as_, bs)
                     tol = (errt + errs) * LINE_SLACK
@@ -282,14 +356,14 @@ def trace_pairs(
                                 if not (los < (at if w == 0 else bt) < his):
                                     continue
                                 k0 = kt if w == 0 else (kt + 2) % 3
-                                lam, dl, first, cx_, cy_, cz_, perr = corner_crossing(
-                                    0, k0, v0, v1, v2, t0x, t0y, t0z, t1x, t1y, t1z,
-                                    t2x, t2y, t2z, e0, e1, e2, eps_s, gscale,
-                                )  # fmt: skip
-                                if HI[ft, 9 + k0]:
+                                t_face = ((v0, v1, v2), t_corners, (e0, e1, e2), eps_s)
+                                lam, dl, first, point, perr = corner_crossing(
+                                    0, k0, t_face, gscale
+                                )
+                                if HI[ft, FACE_OWNS + k0]:
                                     if nrec[0] >= cap:
                                         return seg, segerr, ncross, npairs, OVERFLOW
-                                    ed = HI[ft, 3 + k0]
+                                    ed = HI[ft, FACE_EDGES + k0]
                                     arec_e[nrec[0]] = ed
                                     arec_l[nrec[0]] = lam
                                     arec_d[nrec[0]] = dl
@@ -299,10 +373,10 @@ def trace_pairs(
                                 if not (lot < (as_ if w == 2 else bs) < hit):
                                     continue
                                 k0 = ks if w == 2 else (ks + 2) % 3
-                                lam, dl, first, cx_, cy_, cz_, perr = corner_crossing(
-                                    1, k0, i0, i1, i2, sa0, sa1, sa2, sb0, sb1, sb2,
-                                    sc0, sc1, sc2, f0, f1, f2, eps_t, gscale,
-                                )  # fmt: skip
+                                s_face = ((i0, i1, i2), s_corners, (f0, f1, f2), eps_t)
+                                lam, dl, first, point, perr = corner_crossing(
+                                    1, k0, s_face, gscale
+                                )
                                 if BTO[s, k0]:
                                     if nrec[1] >= cap:
                                         return seg, segerr, ncross, npairs, OVERFLOW
@@ -315,41 +389,41 @@ def trace_pairs(
                             # The segment runs from its start to its end along n_t x n_s; the
                             # curve goes on across the end's edge.
                             if first:
-                                px, py, pz, ep = cx_, cy_, cz_, perr
+                                (px, py, pz), ep = point, perr
                                 nstart += 1
                             else:
-                                qx, qy, qz, eq = cx_, cy_, cz_, perr
+                                (qx, qy, qz), eq = point, perr
                                 exit_row = 0 if w < 2 else 1
                                 exit_k = k0
                             npt += 1
                         if npt != 2 or nstart != 1:
                             return seg, segerr, ncross, npairs, DEGENERATE
-                        term, terr = segment_term(
-                            px, py, pz, qx, qy, qz, ep, eq, HF[ft, 15], HF[ft, 16], HF[ft, 17],
-                            BD[s, 0], BD[s, 1], BD[s, 2],
-                        )  # fmt: skip
+                        D_t = (HF[ft, FACE_D], HF[ft, FACE_D + 1], HF[ft, FACE_D + 2])
+                        D_s = (BD[s, 0], BD[s, 1], BD[s, 2])
+                        term, terr = segment_term((px, py, pz), (qx, qy, qz), ep, eq, D_t, D_s)
                         crossing = True
                         decided = True
                     else:
                         sg[0, 0], sg[0, 1], sg[0, 2] = sign(e0), sign(e1), sign(e2)
                         sg[1, 0], sg[1, 1], sg[1, 2] = sign(f0), sign(f1), sign(f2)
-                        dt[0, 0], dt[0, 1], dt[0, 2], dt[0, 3] = e0, e1, e2, eps_s
-                        dt[1, 0], dt[1, 1], dt[1, 2], dt[1, 3] = f0, f1, f2, eps_t
+                        dt[0, 0], dt[0, 1], dt[0, 2], dt[0, DIST_ERR] = e0, e1, e2, eps_s
+                        dt[1, 0], dt[1, 1], dt[1, 2], dt[1, DIST_ERR] = f0, f1, f2, eps_t
                 if not decided:
-                    term, terr, pc = pair(
-                        ft, s, AF, ATE, ATO, AV, BF, BTE, BTO, BV, AD, BD, acnt, bcnt,
-                        arec, brec, nrec, P, sg, dt, sided, gscale,
-                    )  # fmt: skip
+                    term, terr, pc = pair(ft, s, hand_side, object_side, scratch, sided, gscale)
                     if pc >= DEGENERATE:
                         code = DEGENERATE if pc == DEGENERATE else OVERFLOW
                         return seg, segerr, ncross, npairs, code
                     if pc == CROSS:
                         crossing = True
-                        j = 0 if P[0, 4] == 0.0 else 1
-                        exit_row = int(P[j, 5])
-                        exit_k = int(P[j, 6])
-                        px, py, pz = P[1 - j, 0], P[1 - j, 1], P[1 - j, 2]
-                        qx, qy, qz = P[j, 0], P[j, 1], P[j, 2]
+                        j = 0 if P[0, POINT_STARTS] == 0.0 else 1
+                        exit_row = int(P[j, POINT_MESH])
+                        exit_k = int(P[j, POINT_CORNER])
+                        px, py, pz = (
+                            P[1 - j, POINT_XYZ],
+                            P[1 - j, POINT_XYZ + 1],
+                            P[1 - j, POINT_XYZ + 2],
+                        )
+                        qx, qy, qz = P[j, POINT_XYZ], P[j, POINT_XYZ + 1], P[j, POINT_XYZ + 2]
             if not crossing:
                 if chained:
                     return seg, segerr, ncross, npairs, DEGENERATE
@@ -357,19 +431,33 @@ def trace_pairs(
             tags[h] = tag + 1
             if keep:
                 # The segment, for the derivatives (fewer crossings than pairs in the table).
-                segs[ncross, 0] = ft
-                segs[ncross, 1], segs[ncross, 2], segs[ncross, 3] = px, py, pz
-                segs[ncross, 4], segs[ncross, 5], segs[ncross, 6] = qx, qy, qz
-                segs[ncross, 7], segs[ncross, 8] = HF[ft, 0], HF[ft, 1]
-                segs[ncross, 9], segs[ncross, 10] = HF[ft, 2], HF[ft, 18]
+                segs[ncross, SEGMENT_FACE] = ft
+                (
+                    segs[ncross, SEGMENT_P],
+                    segs[ncross, SEGMENT_P + 1],
+                    segs[ncross, SEGMENT_P + 2],
+                ) = px, py, pz
+                (
+                    segs[ncross, SEGMENT_Q],
+                    segs[ncross, SEGMENT_Q + 1],
+                    segs[ncross, SEGMENT_Q + 2],
+                ) = qx, qy, qz
+                segs[ncross, SEGMENT_NORMAL], segs[ncross, SEGMENT_NORMAL + 1] = (
+                    HF[ft, FACE_NORMAL],
+                    HF[ft, FACE_NORMAL + 1],
+                )
+                segs[ncross, SEGMENT_NORMAL + 2], segs[ncross, SEGMENT_LINK] = (
+                    HF[ft, FACE_NORMAL + 2],
+                    HF[ft, FACE_LINK],
+                )
             seg += term
             run += abs(seg)
-            segerr += terr + HF[ft, 5] + beta_s
+            segerr += terr + HF[ft, FACE_D_COST] + beta_s
             ncross += 1
             chained = True
             # The next pair along the curve: across the end's edge.
             if exit_row == 0:
-                ft = HI[ft, 6 + exit_k]
+                ft = HI[ft, FACE_ACROSS + exit_k]
             else:
                 ed = BTE[s, exit_k]
                 s = BET[ed, 1] if BET[ed, 0] == s else BET[ed, 0]

@@ -22,7 +22,25 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.backends.exact.cells import surface_cells_in
-from exactgrasp.backends.exact.tables import CHUNK, COTREE_CHUNK, LIST_GROUP
+from exactgrasp.backends.exact.tables import (
+    BOX_MAX,
+    BOX_MIN,
+    CELL_AXIS,
+    CELL_BOX_MAX,
+    CELL_BOX_MIN,
+    CELL_SLAB_HIGH,
+    CELL_SLAB_LOW,
+    CHUNK,
+    COTREE_CHUNK,
+    FILTER_NORMAL,
+    FILTER_OFFSET,
+    FILTER_SIDE_COLUMNS,
+    FILTER_SIDE_OFFSET,
+    FILTER_SIDES,
+    LIST_GROUP,
+    SPHERE_CENTRE,
+    SPHERE_RADIUS,
+)
 from exactgrasp.backends.exact.tolerances import FILTER_ERR, GRID_MARGIN, PLANE_TOL, U
 from exactgrasp.compiling import inner
 
@@ -40,6 +58,22 @@ def frame_defect(R):
             dot = R[0, i] * R[0, j] + R[1, i] * R[1, j] + R[2, i] * R[2, j]
             worst = max(worst, abs(dot - (1.0 if i == j else 0.0)))
     return worst
+
+
+@inner(nogil=True, error_model="numpy")
+def _sphere_meets_cell(row, m, r, margin):
+    """Whether the sphere of centre m (x, y, z) and radius r may meet what a cell holds (its
+    bounds row ``row``, `_cell_row`): the slab along the cell's axis (widened by ``margin``)
+    and the clipped common box, with one branch."""
+    m0, m1, m2 = m
+    a = row[CELL_AXIS] * m0 + row[CELL_AXIS + 1] * m1 + row[CELL_AXIS + 2] * m2
+    lo, hi = CELL_BOX_MIN, CELL_BOX_MAX
+    return (
+        (a - r <= row[CELL_SLAB_HIGH] + margin) & (a + r >= row[CELL_SLAB_LOW] - margin)
+        & (row[lo] <= m0 + r) & (row[hi] >= m0 - r)
+        & (row[lo + 1] <= m1 + r) & (row[hi + 1] >= m1 - r)
+        & (row[lo + 2] <= m2 + r) & (row[hi + 2] >= m2 - r)
+    )  # fmt: skip
 
 
 @inner(nogil=True, error_model="numpy")
@@ -64,10 +98,15 @@ def near_runs(runs, R, t, inverse, stretch, grow, scan, grid, rng, parent, per, 
         if levels and not parent[k // per]:
             near[k] = False
             continue
-        c0, c1, c2 = runs[k, 0], runs[k, 1], runs[k, 2]
+        c0, c1, c2 = runs[k, SPHERE_CENTRE], runs[k, SPHERE_CENTRE + 1], runs[k, SPHERE_CENTRE + 2]
         if inverse:
             c0, c1, c2 = c0 - t[0], c1 - t[1], c2 - t[2]
-        r = runs[k, 3] * stretch + margin + grow + (stretch - 1.0) * (abs(c0) + abs(c1) + abs(c2))
+        r = (
+            runs[k, SPHERE_RADIUS] * stretch
+            + margin
+            + grow
+            + (stretch - 1.0) * (abs(c0) + abs(c1) + abs(c2))
+        )
         ok = True
         m0 = m1 = m2 = 0.0
         for d in range(3):
@@ -101,24 +140,21 @@ def near_runs(runs, R, t, inverse, stretch, grow, scan, grid, rng, parent, per, 
                         c = (i * n1 + j) * n2 + kk
                         if cs[c + 1] == cs[c]:
                             continue
-                        a = PT[c, 0] * m0 + PT[c, 1] * m1 + PT[c, 2] * m2
-                        ok = ok | (
-                            (a - r <= PT[c, 4] + margin) & (a + r >= PT[c, 3] - margin)
-                            & (PT[c, 5] <= m0 + r) & (PT[c, 8] >= m0 - r)
-                            & (PT[c, 6] <= m1 + r) & (PT[c, 9] >= m1 - r)
-                            & (PT[c, 7] <= m2 + r) & (PT[c, 10] >= m2 - r)
-                        )  # fmt: skip
+                        row = _cell_row(PT, c)
+                        ok = ok | _sphere_meets_cell(row, (m0, m1, m2), r, margin)
         near[k] = ok
 
 
 @inner(nogil=True, error_model="numpy")
-def _crossing_point(px, py, pz, qx, qy, qz, dp, dq, eps, ptol, g):
-    """Where segment p q crosses a plane, from its ends' distances dp, dq (opposite signs or
-    within the tolerance ``max(ptol, 2 eps)``, each erring by up to eps), and the tolerance of a
-    test of that point against the face's edges (`prepare.face_filters`): (fixed, x, y, z,
-    tolerance), ``fixed`` False where the distances do not fix the point well enough (the face
-    is then kept). ``g`` bounds every coordinate. Scalars only: a routine taking arrays, even
-    inlined, updates their reference counts."""
+def _crossing_point(p, q, dp, dq, eps, ptol, g):
+    """Where segment p q (ends (x, y, z)) crosses a plane, from its ends' distances dp, dq
+    (opposite signs or within the tolerance ``max(ptol, 2 eps)``, each erring by up to eps),
+    and the tolerance of a test of that point against the face's edges
+    (`prepare.face_filters`): (fixed, x, y, z, tolerance), ``fixed`` False where the distances
+    do not fix the point well enough (the face is then kept). ``g`` bounds every coordinate.
+    Scalars only: a routine taking arrays would update their reference counts."""
+    px, py, pz = p
+    qx, qy, qz = q
     tol = max(ptol, 2.0 * eps)
     span = abs(dp) + abs(dq)
     if span <= 4.0 * tol:
@@ -132,32 +168,42 @@ def _crossing_point(px, py, pz, qx, qy, qz, dp, dq, eps, ptol, g):
 
 
 @inner(nogil=True, error_model="numpy")
-def _may_cross(row, px, py, pz, qx, qy, qz, eps, ptol, g):
-    """Whether segment p q may cross a face whose filter row (`prepare.face_filters`) is
-    ``row``, a tuple of its 16 values: False only where both ends lie beyond the tolerance
-    ``max(ptol, 2 eps)`` on one side of its plane, or where the crossing point lies beyond its
-    tolerance outside one of its edges. ``eps`` bounds a plane distance's error, ``g`` every
-    coordinate. A tuple, not the filters' array: an array argument would cost two atomic
-    reference-count updates a call."""
-    dp = row[0] * px + row[1] * py + row[2] * pz - row[3]
-    dq = row[0] * qx + row[1] * qy + row[2] * qz - row[3]
+def _filter_dot(row, column, x, y, z):
+    """``normal · x`` of the filter normal (3) at ``column`` of a face's filter row ``row``."""
+    return row[column] * x + row[column + 1] * y + row[column + 2] * z
+
+
+@inner(nogil=True, error_model="numpy")
+def _may_cross(row, p, q, eps, ptol, g):
+    """Whether segment p q (ends (x, y, z)) may cross a face whose filter row
+    (`prepare.face_filters`, columns ``FILTER_*``) is ``row``, a tuple of its values: False
+    only where both ends lie beyond the tolerance ``max(ptol, 2 eps)`` on one side of its
+    plane, or where the crossing point lies beyond its tolerance outside one of its edges.
+    ``eps`` bounds a plane distance's error, ``g`` every coordinate. A tuple, not the filters'
+    array: an array argument would cost two atomic reference-count updates a call."""
+    dp = _filter_dot(row, FILTER_NORMAL, p[0], p[1], p[2]) - row[FILTER_OFFSET]
+    dq = _filter_dot(row, FILTER_NORMAL, q[0], q[1], q[2]) - row[FILTER_OFFSET]
     tol = max(ptol, 2.0 * eps)
     if ((dp > tol) & (dq > tol)) | ((dp < -tol) & (dq < -tol)):
         return False
-    fixed, x, y, z, st = _crossing_point(px, py, pz, qx, qy, qz, dp, dq, eps, ptol, g)
+    fixed, x, y, z, st = _crossing_point(p, q, dp, dq, eps, ptol, g)
+    # Corner k's edge: its normal from FILTER_SIDES + FILTER_SIDE_COLUMNS k, then its offset.
+    s0 = FILTER_SIDES
+    s1 = FILTER_SIDES + FILTER_SIDE_COLUMNS
+    s2 = FILTER_SIDES + 2 * FILTER_SIDE_COLUMNS
     return not (
         fixed
         and (
-            (row[4] * x + row[5] * y + row[6] * z < row[7] - st)
-            | (row[8] * x + row[9] * y + row[10] * z < row[11] - st)
-            | (row[12] * x + row[13] * y + row[14] * z < row[15] - st)
+            (_filter_dot(row, s0, x, y, z) < row[s0 + FILTER_SIDE_OFFSET] - st)
+            | (_filter_dot(row, s1, x, y, z) < row[s1 + FILTER_SIDE_OFFSET] - st)
+            | (_filter_dot(row, s2, x, y, z) < row[s2 + FILTER_SIDE_OFFSET] - st)
         )
     )
 
 
 @inner(nogil=True, error_model="numpy")
 def _filter_row(FL, f):
-    """Row f of the filters (m, 16) as a tuple, for `_may_cross`."""
+    """Row f of the filters (m, `FILTER_COLUMNS`) as a tuple, for `_may_cross`."""
     return (
         FL[f, 0], FL[f, 1], FL[f, 2], FL[f, 3], FL[f, 4], FL[f, 5], FL[f, 6], FL[f, 7],
         FL[f, 8], FL[f, 9], FL[f, 10], FL[f, 11], FL[f, 12], FL[f, 13], FL[f, 14], FL[f, 15],
@@ -166,8 +212,8 @@ def _filter_row(FL, f):
 
 @inner(nogil=True, error_model="numpy")
 def _cell_row(PT, c):
-    """Row c of a grid's cell bounds (`tables.CellGrid.bounds`, 11 values) as a tuple, for
-    `_piece_meets_cell`."""
+    """Row c of a grid's cell bounds (`tables.CellGrid.bounds`, `CELL_BOUNDS_COLUMNS` values)
+    as a tuple, for `_piece_meets_cell`."""
     return (
         PT[c, 0], PT[c, 1], PT[c, 2], PT[c, 3], PT[c, 4], PT[c, 5], PT[c, 6], PT[c, 7],
         PT[c, 8], PT[c, 9], PT[c, 10],
@@ -175,18 +221,81 @@ def _cell_row(PT, c):
 
 
 @inner(nogil=True, error_model="numpy")
-def _piece_meets_cell(row, ax, ay, az, bx, by, bz, x0, x1, y0, y1, z0, z1, tol):
-    """Whether the piece a b of a segment (its box x0..z1, already grown) may meet what a cell
-    holds of its faces: their clipped common box and the slab ``row[3] - tol <= n·x <=
-    row[4] + tol`` along the direction ``row[:3]`` (the cell's bounds row, `_cell_row`), with
-    one branch. A tuple, not the bounds' array: an array argument would cost atomic
-    reference-count updates a call."""
-    pa = row[0] * ax + row[1] * ay + row[2] * az
-    pb = row[0] * bx + row[1] * by + row[2] * bz
+def _piece_box(a, b, grow):
+    """The box of the piece a b of a segment (ends (x, y, z)), grown by ``grow``: (lower
+    corner, upper corner)."""
+    ax, ay, az = a
+    bx, by, bz = b
+    x0, x1 = min(ax, bx) - grow, max(ax, bx) + grow
+    y0, y1 = min(ay, by) - grow, max(ay, by) + grow
+    z0, z1 = min(az, bz) - grow, max(az, bz) + grow
+    return (x0, y0, z0), (x1, y1, z1)
+
+
+@inner(nogil=True, error_model="numpy")
+def _piece_meets_cell(row, a, b, box, tol):
+    """Whether the piece a b of a segment (its box ``box``, already grown) may meet what a cell
+    holds of its faces: their clipped common box and the slab ``row[CELL_SLAB_LOW] - tol <= n·x
+    <= row[CELL_SLAB_HIGH] + tol`` along the direction ``n`` at ``row[CELL_AXIS]`` (the cell's
+    bounds row, `_cell_row`), with one branch. A tuple, not the bounds' array: an array
+    argument would cost atomic reference-count updates a call."""
+    (x0, y0, z0), (x1, y1, z1) = box
+    ax, ay, az = a
+    bx, by, bz = b
+    n0, n1, n2 = row[CELL_AXIS], row[CELL_AXIS + 1], row[CELL_AXIS + 2]
+    pa = n0 * ax + n1 * ay + n2 * az
+    pb = n0 * bx + n1 * by + n2 * bz
+    lo, hi = CELL_BOX_MIN, CELL_BOX_MAX
     return (
-        (row[5] <= x1) & (row[8] >= x0) & (row[6] <= y1) & (row[9] >= y0) & (row[7] <= z1)
-        & (row[10] >= z0) & (min(pa, pb) <= row[4] + tol) & (max(pa, pb) >= row[3] - tol)
+        (row[lo] <= x1) & (row[hi] >= x0) & (row[lo + 1] <= y1) & (row[hi + 1] >= y0)
+        & (row[lo + 2] <= z1) & (row[hi + 2] >= z0)
+        & (min(pa, pb) <= row[CELL_SLAB_HIGH] + tol) & (max(pa, pb) >= row[CELL_SLAB_LOW] - tol)
     )  # fmt: skip
+
+
+@inner(nogil=True, error_model="numpy")
+def _box_meets(B, i, box):
+    """Whether box row i of ``B`` (columns `BOX_MIN`, `BOX_MAX`) meets ``box`` (lower corner,
+    upper corner), with one branch."""
+    (x0, y0, z0), (x1, y1, z1) = box
+    lo, hi = BOX_MIN, BOX_MAX
+    return (
+        (B[i, lo] <= x1) & (B[i, hi] >= x0) & (B[i, lo + 1] <= y1) & (B[i, hi + 1] >= y0)
+        & (B[i, lo + 2] <= z1) & (B[i, hi + 2] >= z0)
+    )  # fmt: skip
+
+
+# Compiled into each search (numba inlines it before typing): called per cell with five
+# arrays, it would otherwise stay a call that LLVM does not inline.
+@inner(nogil=True, error_model="numpy", inline="always")
+def _cell_survivors(cs, gs, GB, CBB, c, box, buf):
+    """The entries of cell c's list (`tables.CellGrid`) whose clipped boxes meet ``box`` (lower
+    corner, upper corner; ``cs``, ``gs``, ``GB``, ``CBB``: the grid's ``cell_start``,
+    ``group_start``, ``groups`` and ``boxes``): the list's groups' boxes first, then the boxes
+    of the groups that meet it, each comparison evaluated in full and decided with one branch.
+    The entries go to ``buf``; returns how many."""
+    m = 0
+    for g in range(gs[c], gs[c + 1]):
+        if not _box_meets(GB, g, box):
+            continue
+        q0 = cs[c] + LIST_GROUP * (g - gs[c])
+        for q in range(q0, min(q0 + LIST_GROUP, cs[c + 1])):
+            buf[m] = q
+            m += 1 if _box_meets(CBB, q, box) else 0
+    return m
+
+
+@inner(nogil=True, error_model="numpy")
+def _append_seed(seeds, n, t, s):
+    """Pair (hand face t, object face s) as row n of ``seeds`` unless row n - 1 holds it: the new
+    count, or -1 when the buffer is full."""
+    if n > 0 and seeds[n - 1, 0] == t and seeds[n - 1, 1] == s:
+        return n
+    if n >= seeds.shape[0]:
+        return -1
+    seeds[n, 0] = t
+    seeds[n, 1] = s
+    return n + 1
 
 
 @inner(nogil=True, error_model="numpy")
@@ -208,7 +317,6 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
     cs, ct, table = hand_grid.cell_start, hand_grid.cell_faces, hand_grid.surface_table
     gs, GB = hand_grid.group_start, hand_grid.groups
     seeds, rng, buf = work.seeds, work.cell_range, work.survivors
-    cap = seeds.shape[0]
     ih = 1.0 / h
     margin = GRID_MARGIN * h
     ptol = PLANE_TOL * h
@@ -221,6 +329,7 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
             u, v = BE[f, 0], BE[f, 1]
             px, py, pz = BV[u, 0], BV[u, 1], BV[u, 2]
             qx, qy, qz = BV[v, 0], BV[v, 1], BV[v, 2]
+            start, end = (px, py, pz), (qx, qy, qz)
             # The edge's box of cells must hold a surface cell.
             inside = True
             for d in range(3):
@@ -273,31 +382,10 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
                 if cs[c + 1] > cs[c]:
                     ax_, ay_, az_ = px + lam_a * dx, py + lam_a * dy, pz + lam_a * dz
                     bx_, by_, bz_ = px + lam_b * dx, py + lam_b * dy, pz + lam_b * dz
-                    x0, x1 = min(ax_, bx_) - margin, max(ax_, bx_) + margin
-                    y0, y1 = min(ay_, by_) - margin, max(ay_, by_) + margin
-                    z0, z1 = min(az_, bz_) - margin, max(az_, bz_) + margin
-                    ok = _piece_meets_cell(
-                        _cell_row(PT, c), ax_, ay_, az_, bx_, by_, bz_, x0, x1, y0, y1, z0, z1,
-                        margin,
-                    )  # fmt: skip
-                    if ok:
-                        # The list's groups' boxes, then the boxes of the groups that meet the
-                        # piece's box.
-                        m = 0
-                        for g in range(gs[c], gs[c + 1]):
-                            if not (
-                                (GB[g, 0] <= x1) & (GB[g, 3] >= x0) & (GB[g, 1] <= y1)
-                                & (GB[g, 4] >= y0) & (GB[g, 2] <= z1) & (GB[g, 5] >= z0)
-                            ):  # fmt: skip
-                                continue
-                            q0 = cs[c] + LIST_GROUP * (g - gs[c])
-                            for q in range(q0, min(q0 + LIST_GROUP, cs[c + 1])):
-                                hit = (
-                                    (CBB[q, 0] <= x1) & (CBB[q, 3] >= x0) & (CBB[q, 1] <= y1)
-                                    & (CBB[q, 4] >= y0) & (CBB[q, 2] <= z1) & (CBB[q, 5] >= z0)
-                                )  # fmt: skip
-                                buf[m] = q
-                                m += 1 if hit else 0
+                    a, b = (ax_, ay_, az_), (bx_, by_, bz_)
+                    box = _piece_box(a, b, margin)
+                    if _piece_meets_cell(_cell_row(PT, c), a, b, box, margin):
+                        m = _cell_survivors(cs, gs, GB, CBB, c, box, buf)
                         # The survivors against the piece itself (not its box): the three axes
                         # d × e_k separating a segment from a box, with one branch each.
                         dx_, dy_, dz_ = bx_ - ax_, by_ - ay_, bz_ - az_
@@ -306,12 +394,12 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
                         kept = 0
                         for j in range(m):
                             q = buf[j]
-                            hx = 0.5 * (CBB[q, 3] - CBB[q, 0])
-                            hy = 0.5 * (CBB[q, 4] - CBB[q, 1])
-                            hz = 0.5 * (CBB[q, 5] - CBB[q, 2])
-                            cx = 0.5 * (CBB[q, 3] + CBB[q, 0]) - ax_
-                            cy = 0.5 * (CBB[q, 4] + CBB[q, 1]) - ay_
-                            cz = 0.5 * (CBB[q, 5] + CBB[q, 2]) - az_
+                            hx = 0.5 * (CBB[q, BOX_MAX] - CBB[q, BOX_MIN])
+                            hy = 0.5 * (CBB[q, BOX_MAX + 1] - CBB[q, BOX_MIN + 1])
+                            hz = 0.5 * (CBB[q, BOX_MAX + 2] - CBB[q, BOX_MIN + 2])
+                            cx = 0.5 * (CBB[q, BOX_MAX] + CBB[q, BOX_MIN]) - ax_
+                            cy = 0.5 * (CBB[q, BOX_MAX + 1] + CBB[q, BOX_MIN + 1]) - ay_
+                            cz = 0.5 * (CBB[q, BOX_MAX + 2] + CBB[q, BOX_MIN + 2]) - az_
                             apart = (
                                 (abs(dz_ * cy - dy_ * cz) > adz * hy + ady * hz + slack)
                                 | (abs(dx_ * cz - dz_ * cx) > adz * hx + adx * hz + slack)
@@ -324,17 +412,11 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
                             # Both ends beyond the tolerance on one side: no crossing. Else the
                             # crossing point must not lie beyond it outside an edge of the face.
                             eps = (FE[ft] + FILTER_ERR) * gscale
-                            if not _may_cross(
-                                _filter_row(FL, ft), px, py, pz, qx, qy, qz, eps, ptol, gscale
-                            ):
+                            if not _may_cross(_filter_row(FL, ft), start, end, eps, ptol, gscale):
                                 continue
-                            if n > 0 and seeds[n - 1, 0] == ft and seeds[n - 1, 1] == s1:
-                                continue
-                            if n >= cap:
+                            n = _append_seed(seeds, n, ft, s1)
+                            if n < 0:
                                 return -1
-                            seeds[n, 0] = ft
-                            seeds[n, 1] = s1
-                            n += 1
                 if lam_b >= l1:
                     break
                 lam_a = lam_b
@@ -374,7 +456,6 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
     cs, ct = object_grid.cell_start, object_grid.cell_faces
     gs, GB = object_grid.group_start, object_grid.groups
     seeds, buf = work.seeds, work.survivors
-    cap = seeds.shape[0]
     ih = 1.0 / h
     grow = GRID_MARGIN * h + ferr
     ptol = PLANE_TOL * max(h, hcell) + 2.0 * ferr
@@ -397,6 +478,7 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
             qx = r00 * b0 + r10 * b1 + r20 * b2
             qy = r01 * b0 + r11 * b1 + r21 * b2
             qz = r02 * b0 + r12 * b1 + r22 * b2
+            start, end = (px, py, pz), (qx, qy, qz)
             t1f = AET[e, 0]
             # Pieces of at most a cell along every axis, each with its box of cells (tested with
             # the piece: a cell two pieces share is tested twice): a long edge visits few cells,
@@ -406,9 +488,9 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
                 la, lb = w / pieces, (w + 1) / pieces
                 ax_, ay_, az_ = px + la * (qx - px), py + la * (qy - py), pz + la * (qz - pz)
                 bx_, by_, bz_ = px + lb * (qx - px), py + lb * (qy - py), pz + lb * (qz - pz)
-                x0, x1 = min(ax_, bx_) - grow, max(ax_, bx_) + grow
-                y0, y1 = min(ay_, by_) - grow, max(ay_, by_) + grow
-                z0, z1 = min(az_, bz_) - grow, max(az_, bz_) + grow
+                a, b = (ax_, ay_, az_), (bx_, by_, bz_)
+                box = _piece_box(a, b, grow)
+                (x0, y0, z0), (x1, y1, z1) = box
                 i0 = max(int(np.floor((x0 - lo[0]) * ih)), 0)
                 i1 = min(int(np.floor((x1 - lo[0]) * ih)), dims[0] - 1)
                 j0 = max(int(np.floor((y0 - lo[1]) * ih)), 0)
@@ -423,41 +505,17 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
                                 continue
                             # The piece against what the cell holds, then the listed faces'
                             # clipped boxes, each with one branch.
-                            ok = _piece_meets_cell(
-                                _cell_row(PT, c), ax_, ay_, az_, bx_, by_, bz_, x0, x1, y0, y1,
-                                z0, z1, grow,
-                            )  # fmt: skip
-                            if not ok:
+                            if not _piece_meets_cell(_cell_row(PT, c), a, b, box, grow):
                                 continue
-                            m = 0
-                            for g in range(gs[c], gs[c + 1]):
-                                if not (
-                                    (GB[g, 0] <= x1) & (GB[g, 3] >= x0) & (GB[g, 1] <= y1)
-                                    & (GB[g, 4] >= y0) & (GB[g, 2] <= z1) & (GB[g, 5] >= z0)
-                                ):  # fmt: skip
-                                    continue
-                                q0 = cs[c] + LIST_GROUP * (g - gs[c])
-                                for q in range(q0, min(q0 + LIST_GROUP, cs[c + 1])):
-                                    hit = (
-                                        (CBB[q, 0] <= x1) & (CBB[q, 3] >= x0)
-                                        & (CBB[q, 1] <= y1) & (CBB[q, 4] >= y0)
-                                        & (CBB[q, 2] <= z1) & (CBB[q, 5] >= z0)
-                                    )  # fmt: skip
-                                    buf[m] = ct[q]
-                                    m += 1 if hit else 0
+                            m = _cell_survivors(cs, gs, GB, CBB, c, box, buf)
                             for jj in range(m):
-                                s = buf[jj]
+                                s = ct[buf[jj]]
                                 eps = (FE[s] + FILTER_ERR) * gscale + ferr
-                                keep = _may_cross(
-                                    _filter_row(FL, s), px, py, pz, qx, qy, qz, eps, ptol, gscale
-                                )
+                                row = _filter_row(FL, s)
+                                keep = _may_cross(row, start, end, eps, ptol, gscale)
                                 if not keep:
                                     continue
-                                if n > 0 and seeds[n - 1, 0] == t1f and seeds[n - 1, 1] == s:
-                                    continue
-                                if n >= cap:
+                                n = _append_seed(seeds, n, t1f, s)
+                                if n < 0:
                                     return -1
-                                seeds[n, 0] = t1f
-                                seeds[n, 1] = s
-                                n += 1
     return n
