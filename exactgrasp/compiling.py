@@ -20,7 +20,7 @@ numba's on-disk cache) plus two rules that cut compile time without changing a r
 
 Import this module's decorators in every kernel module; see "Cold start" in
 docs/performance.md for the measurements and the rules that keep compilation short (no
-``inline="always"``, writable arrays, no numba sorts).
+``inline="always"`` but for the seeds' one small cell filter, writable arrays, no numba sorts).
 
 It also watches numba's ``numba:compile`` event, which numba fires only when it compiles a
 function (a cache miss), never when a kernel loads from its on-disk cache. The first time in a

@@ -162,7 +162,11 @@ def trace_pairs(
     coordinate bound ``gscale``; hand faces' coefficients in their records), at least
     `PLANE_TOL` of a hand cell. ``obj.d_cost`` (object faces, over the coordinate bound
     ``gb``) and the hand face records' ``dcost`` (absolute) are what each face's rounded ``D``
-    costs its terms (`prepare.face_d_coefs`)."""
+    costs its terms (`prepare.face_d_coefs`).
+
+    Long because it is one loop: numba does not inline stage functions that read the
+    tables' arrays, and as calls they cost reference counting on every face pair (measured
+    slower; see docs/exact-backend.md, "Code layout")."""
     AV, AF = hand_mesh.vertices, hand_mesh.faces
     ATE, ATO = hand_mesh.face_edges, hand_mesh.face_owns
     BF, BTE, BTO = object_mesh.faces, object_mesh.face_edges, object_mesh.face_owns

@@ -310,7 +310,11 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
 
     A crossing point lies in some cell the edge passes, and the face holding it is listed
     there with its box clipped to that cell (both grown by `GRID_MARGIN`, far above the walk's
-    rounding)."""
+    rounding).
+
+    Long because it is one loop: numba does not inline stage functions that read the
+    tables' arrays, and as calls they cost reference counting on every candidate (measured
+    slower; see docs/exact-backend.md, "Code layout")."""
     BE, BET, order = object_mesh.edges, object_mesh.edge_faces, obj.edge_order
     FL, FE, CBB, PT = hand.filters, hand.filter_err, hand_grid.boxes, hand_grid.bounds
     lo, h, dims = hand_grid.corner, hand_grid.cell, hand_grid.shape
