@@ -156,7 +156,11 @@ class Overlap:
     bounds: Any
 
 
-def _setup(a, b, poses, backend, units, repair, check_scale):
+#: The keyword options of `intersection` that `intersection_gradient` takes too.
+_OPTIONS = {"units", "repair", "check_scale"}
+
+
+def _setup(a, b, poses, backend, *, units="m", repair=REPAIR, check_scale=True):
     """The checked inputs of `intersection_volume` and `intersection_gradient`: (whether one
     pose was given, the poses (..., 4, 4), the intersector or None for no poses)."""
     backend = _exact_backend(backend)
@@ -250,7 +254,8 @@ def intersection(
         A pose that is not a rigid motion (the message names ``poses`` and its index), a
         ``backend`` other than the exact one.
     """
-    single, arr, intersector = _setup(a, b, poses, backend, units, repair, check_scale)
+    options = {"units": units, "repair": repair, "check_scale": check_scale}
+    single, arr, intersector = _setup(a, b, poses, backend, **options)
     if intersector is None:
         empty = np.zeros(arr.shape[:-2])
         return Overlap(empty, empty.copy())
@@ -262,14 +267,7 @@ def intersection(
 
 
 def intersection_gradient(
-    a: Any,
-    b: Any,
-    poses: Any = None,
-    backend: str | ExactBackend = "exact",
-    *,
-    units: str | tuple[str, str] = "m",
-    repair: bool = REPAIR,
-    check_scale: bool = True,
+    a: Any, b: Any, poses: Any = None, backend: str | ExactBackend = "exact", **options: Any
 ) -> np.ndarray:
     """Derivative of the exact volume of ``a`` ∩ ``b`` by a rigid motion of ``b``.
 
@@ -287,8 +285,10 @@ def intersection_gradient(
 
     Parameters
     ----------
-    a, b, poses, backend, units, repair, check_scale
+    a, b, poses, backend
         As for `intersection`.
+    **options
+        `intersection`'s keyword options (``units``, ``repair``, ``check_scale``).
 
     Returns
     -------
@@ -301,7 +301,13 @@ def intersection_gradient(
     MeshError, BackendError
         As for `intersection_volume`.
     """
-    single, arr, intersector = _setup(a, b, poses, backend, units, repair, check_scale)
+    unknown = sorted(set(options) - _OPTIONS)
+    if unknown:
+        raise TypeError(
+            f"intersection_gradient() got unexpected keyword arguments {unknown}; its options "
+            f"are intersection's: {', '.join(sorted(_OPTIONS))}."
+        )
+    single, arr, intersector = _setup(a, b, poses, backend, **options)
     if intersector is None:
         return np.zeros((*arr.shape[:-2], 6))
     _, links = volume_moments(intersector, arr)

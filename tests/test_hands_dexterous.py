@@ -66,7 +66,7 @@ def test_close_fingers_closes_the_adroit_hand_on_a_box():
     hand = eg.hands.adroit()
     box = eg.objects.box((0.05, 0.05, 0.05))
     pose = _in_front_of_palm(hand, 0.03)
-    result = eg.close_fingers(hand, box, object_pose=pose, full_output=True)
+    result = eg.close_fingers_result(hand, box, object_pose=pose)
     assert result.backoff_distance == 0.0
     touching = {f.joints[0]: f.contact_links for f in result.fingers}
     assert all(touching[j] for j in ("FFJ2", "MFJ2", "RFJ2", "LFJ2")), touching

@@ -23,6 +23,7 @@ from exactgrasp.cli.common import (
     add_sampler,
     flag,
     in_flag_terms,
+    options_named,
     sampler_from_args,
 )
 from exactgrasp.cli.params import add_param, build_backend, split_params
@@ -80,15 +81,11 @@ def _run(args: argparse.Namespace, sampler, backend):
         args.out,
         backend=backend,
         sampler=sampler,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        progress=args.progress,
-        part_size=args.part_size,
-        on_limit=args.on_limit,
-        retry_failed=args.retry_failed,
-        units=args.units,
-        repair=args.repair,
-    )
+        **options_named(
+            args, "workers", "scheduler", "progress", "part_size", "on_limit", "retry_failed",
+            "units", "repair",
+        ),
+    )  # fmt: skip
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:

@@ -20,6 +20,7 @@ from exactgrasp.cli.common import (
     flag,
     grasp_from_args,
     in_flag_terms,
+    options_named,
 )
 from exactgrasp.errors import ClosingError, JointError
 from exactgrasp.geometry.bvh import ENGINES
@@ -123,10 +124,7 @@ def cmd_close(args: argparse.Namespace) -> int:
                 grasp.object_pose,
                 joints=joints,
                 direction=direction,
-                tolerance=args.tolerance,
-                step=args.step,
-                backoff=args.backoff,
-                engine=args.engine,
+                **options_named(args, "tolerance", "step", "backoff", "engine"),
             )
     except (ClosingError, JointError) as exc:
         raise in_flag_terms(exc, CLOSING_TERMS, f"grasp {grasp.name!r}: ") from exc
@@ -176,22 +174,17 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         choices=tuple(ENGINES),
         help=f"distance library (default {DEFAULTS['engine']})",
     )
-    parser.add_argument(
-        "--tolerance",
-        type=float,
-        default=DEFAULTS["tolerance"],
-        metavar="M",
-        help="largest gap left between a touching link and the object, m (default "
-        f"{DEFAULTS['tolerance']:g})",
-    )
-    parser.add_argument(
-        "--step",
-        type=float,
-        default=DEFAULTS["step"],
-        metavar="RAD",
-        help="largest joint change per advancement step, rad (m for slides; default "
-        f"{DEFAULTS['step']:g})",
-    )
+    for name, metavar, meaning in (
+        ("tolerance", "M", "largest gap left between a touching link and the object, m (default"),
+        ("step", "RAD", "largest joint change per advancement step, rad (m for slides; default"),
+    ):
+        parser.add_argument(
+            f"--{name}",
+            type=float,
+            default=DEFAULTS[name],
+            metavar=metavar,
+            help=f"{meaning} {DEFAULTS[name]:g})",
+        )
     parser.add_argument(
         "--backoff",
         action=argparse.BooleanOptionalAction,

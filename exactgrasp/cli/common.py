@@ -172,6 +172,12 @@ def add_command(
     return parser
 
 
+def options_named(args: argparse.Namespace, *names: str) -> dict[str, Any]:
+    """The parsed options ``names`` as keyword arguments of the library call they are named
+    after (each flag's destination is the parameter's name)."""
+    return {name: getattr(args, name) for name in names}
+
+
 def timing(metadata: dict) -> str:
     """``in 2.31 s``, with the seconds spent compiling the kernels said apart (a descriptor's
     ``seconds`` include them; they are spent once, on first use)."""

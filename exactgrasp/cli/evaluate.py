@@ -16,6 +16,7 @@ from exactgrasp.cli.common import (
     add_backend,
     add_command,
     add_grasp_inputs,
+    options_named,
     read_grasp,
     sampler_from_args,
 )
@@ -82,9 +83,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         sampler=sampler,
         symmetries=args.symmetry,
         cache_dir=args.cache,
-        n_boot=args.n_boot,
-        seed=args.seed,
         unit=args.bootstrap,
+        **options_named(args, "n_boot", "seed"),
     )
     command = "exactgrasp " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     files = write_evaluation(result, args.output, command=command)

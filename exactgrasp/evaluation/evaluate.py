@@ -130,13 +130,7 @@ def _groups(matrix: np.ndarray, pairs: LabelledPairs) -> dict[str, dict[str, Any
 
 
 def evaluate_matrix(
-    matrix: np.ndarray,
-    pairs: LabelledPairs,
-    name: str = "distance",
-    n_boot: int = 2000,
-    seed: int = 0,
-    unit: str = "grasp",
-    level: float = 0.95,
+    matrix: np.ndarray, pairs: LabelledPairs, name: str = "distance", **bootstrap: Any
 ) -> Evaluation:
     """Evaluate one distance matrix on labelled pairs.
 
@@ -146,8 +140,9 @@ def evaluate_matrix(
         Distances between the grasps ``pairs.names`` (smaller = more alike).
     pairs : LabelledPairs
     name : str
-    n_boot, seed, unit, level
-        Of `exactgrasp.evaluation.roc.bootstrap_auc`.
+    **bootstrap
+        ``n_boot``, ``seed``, ``unit``, ``level``: the interval's settings, as for
+        `exactgrasp.evaluation.roc.bootstrap_auc` (and its defaults).
 
     Returns
     -------
@@ -160,9 +155,7 @@ def evaluate_matrix(
             f"distance matrix {name!r} has shape {matrix.shape}; the pairs name {n} grasps."
         )
     d = matrix[pairs.first, pairs.second]
-    ci = bootstrap_auc(
-        d, pairs.label, pairs.first, pairs.second, pairs.grasp_group, unit, n_boot, level, seed
-    )
+    ci = bootstrap_auc(d, pairs.label, pairs.first, pairs.second, pairs.grasp_group, **bootstrap)
     top = pairs.label == pairs.label.max()
     fpr, tpr, _ = roc_curve(d, top)
     return Evaluation(
@@ -300,7 +293,7 @@ def evaluate(
     for b in baselines:
         matrices[f"baseline: {b}"] = baseline_matrix(items, b)
     evaluations = {
-        name: evaluate_matrix(m, pairs, name, n_boot, seed, unit, level)
+        name: evaluate_matrix(m, pairs, name, n_boot=n_boot, seed=seed, unit=unit, level=level)
         for name, m in matrices.items()
     }
     settings = {

@@ -140,11 +140,13 @@ class Study:
 
     def auc(self, matrix: np.ndarray, pairs, name: str, unit: str = "grasp") -> dict[str, Any]:
         """AUC, interval and per-cluster numbers of one matrix."""
-        ev = evaluate_matrix(matrix, pairs, name, self.n_boot, self.seed, unit)
+        ev = evaluate_matrix(matrix, pairs, name, n_boot=self.n_boot, seed=self.seed, unit=unit)
         out = ev.to_dict()
         if unit == "grasp" and pairs.grasp_group is not None:
             # The wider interval of resampling whole clusters, for comparison.
-            by_group = evaluate_matrix(matrix, pairs, name, self.n_boot, self.seed, "group")
+            by_group = evaluate_matrix(
+                matrix, pairs, name, n_boot=self.n_boot, seed=self.seed, unit="group"
+            )
             out["group_interval"] = [by_group.low, by_group.high]
         return out
 

@@ -163,18 +163,6 @@ def adroit(joints: dict[str, float] | None = None, **hand_kwargs) -> Hand:
 
 
 def shadow_hand(joints: dict[str, float] | None = None, **hand_kwargs) -> Hand:
-    """The Shadow hand (from ``gymnasium-robotics``), posed.
-
-    Parameters
-    ----------
-    joints : dict of str to float, optional
-        Joint values in radians (``robot0:FFJ2``, ...); missing ones are 0.
-    **hand_kwargs
-        Passed to `exactgrasp.hands.hand.Hand` (``frame``, ``on_limit``).
-
-    Returns
-    -------
-    exactgrasp.hands.hand.Hand
-        With the hand's palm frame unless ``frame=`` is given.
-    """
+    """The Shadow hand (from ``gymnasium-robotics``), posed: as `adroit`, its joints named
+    ``robot0:FFJ2``, ``robot0:THJ3``, ... (radians; missing ones are 0)."""
     return _posed("shadow_hand", shadow_hand_model(), joints, hand_kwargs)
