@@ -70,7 +70,7 @@ def _timings(out: Path) -> list[dict]:
 def _warm(manifest: Path, backend: str) -> None:
     """Fill numba's disk cache, so that no worker compiles."""
     rows = read_manifest(manifest).rows[:1]
-    compute_rows(rows, str(manifest.parent), (backend, {}), as_sampler(None).params)
+    compute_rows(rows, str(manifest.parent), backend, as_sampler(None).params)
 
 
 def throughput(args, manifest: Path, folder: Path) -> dict:
@@ -138,7 +138,7 @@ def _in_process(manifest: str, backend: str, queue) -> None:
     sampler = as_sampler(None).params
     seconds = []
     for row in m.rows:
-        outcome = compute_rows([row], str(m.base_dir), (backend, {}), sampler)
+        outcome = compute_rows([row], str(m.base_dir), backend, sampler)
         seconds.append((outcome["seconds"], outcome["thread_cpu_seconds"]))
     queue.put(seconds)
 
