@@ -134,6 +134,21 @@ def test_shapes_follow_the_poses():
     assert eg.intersection_gradient(a, b, np.zeros((0, 4, 4))).shape == (0, 6)
 
 
+def test_options_are_intersections_and_others_are_refused_by_name():
+    a = box_arrays([0, 0, 0], [100.0, 80.0, 60.0])
+    b = box_arrays([0, 0, 0], [50.0, 50.0, 50.0])
+    # The same boxes in millimetres (poses are in metres either way): the same gradient.
+    grad = eg.intersection_gradient(a, b, translation(0.07, 0.05, 0.03), units="mm")
+    metres = eg.intersection_gradient(
+        box_arrays([0, 0, 0], [0.1, 0.08, 0.06]),
+        box_arrays([0, 0, 0], [0.05, 0.05, 0.05]),
+        translation(0.07, 0.05, 0.03),
+    )
+    np.testing.assert_allclose(grad, metres, rtol=1e-12, atol=1e-18)
+    with pytest.raises(TypeError, match=r"\['n_jobs'\].*check_scale, repair, units"):
+        eg.intersection_gradient(a, b, n_jobs=1)
+
+
 def test_apart_and_touching_poses_have_zero_gradient():
     a = box_arrays([0, 0, 0], [0.1, 0.08, 0.06])
     b = box_arrays([0, 0, 0], [0.05, 0.05, 0.05])
