@@ -24,7 +24,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from exactgrasp.backends.exact.tables import MomentTables
+from exactgrasp.backends.exact.tables import (
+    EDGE_MOMENTS_T1,
+    EDGE_MOMENTS_T2,
+    MOMENT_COLUMNS,
+    PART_FIRST_VERTEX,
+    SEGMENT_LINK,
+    SEGMENT_NORMAL,
+    SEGMENT_P,
+    SEGMENT_Q,
+    MomentTables,
+)
 from exactgrasp.compiling import inner
 
 __all__ = ["hand_moments", "moment_tables"]
@@ -131,10 +141,11 @@ def segment_moments(segs, ncross, G):
     G : numpy.ndarray, shape (L, 6)
     """
     for k in range(ncross):
-        px, py, pz = segs[k, 1], segs[k, 2], segs[k, 3]
-        qx, qy, qz = segs[k, 4], segs[k, 5], segs[k, 6]
-        nx, ny, nz = segs[k, 7], segs[k, 8], segs[k, 9]
-        lk = int(segs[k, 10])
+        p, q, n = SEGMENT_P, SEGMENT_Q, SEGMENT_NORMAL
+        px, py, pz = segs[k, p], segs[k, p + 1], segs[k, p + 2]
+        qx, qy, qz = segs[k, q], segs[k, q + 1], segs[k, q + 2]
+        nx, ny, nz = segs[k, n], segs[k, n + 1], segs[k, n + 2]
+        lk = int(segs[k, SEGMENT_LINK])
         c = nx * (py * qz - pz * qy) + ny * (pz * qx - px * qz) + nz * (px * qy - py * qx)
         sx, sy, sz = px + qx, py + qy, pz + qz
         a = c / 2.0
@@ -163,18 +174,18 @@ def whole_edge_moments(hand_mesh, hand, mom, S, uniform, G):
     pstart, plink, pmom = mom.part_start, mom.part_link, mom.part_moments
     for p in range(reps.shape[0] - 1):
         if uniform[p]:
-            if S[reps[p, 1]] == 1:
+            if S[reps[p, PART_FIRST_VERTEX]] == 1:
                 for j in range(pstart[p], pstart[p + 1]):
                     lk = plink[j]
-                    for d in range(6):
+                    for d in range(MOMENT_COLUMNS):
                         G[lk, d] += pmom[j, d]
             continue
-        for u in range(reps[p, 1], reps[p + 1, 1]):
+        for u in range(reps[p, PART_FIRST_VERTEX], reps[p + 1, PART_FIRST_VERTEX]):
             if S[u] != 1:
                 continue
             lk = vlink[u]
             if lk >= 0:
-                for d in range(6):
+                for d in range(MOMENT_COLUMNS):
                     G[lk, d] += vmom[u, d]
                 continue
             for k in range(adj_start[u], adj_start[u + 1]):
@@ -182,9 +193,9 @@ def whole_edge_moments(hand_mesh, hand, mom, S, uniform, G):
                     continue
                 e = adj_edge[k]
                 l1, l2 = elink[e, 0], elink[e, 1]
-                for d in range(6):
-                    G[l1, d] += emom[e, d]
-                    G[l2, d] += emom[e, 6 + d]
+                for d in range(MOMENT_COLUMNS):
+                    G[l1, d] += emom[e, EDGE_MOMENTS_T1 + d]
+                    G[l2, d] += emom[e, EDGE_MOMENTS_T2 + d]
 
 
 @inner(nogil=True, error_model="numpy")
@@ -200,7 +211,7 @@ def _add_interval_share(hand_mesh, mom, e, f, g, G):
     dx, dy, dz = V[v, 0] - V[u, 0], V[v, 1] - V[u, 1], V[v, 2] - V[u, 2]
     for side in range(2):
         lk = mom.edge_links[e, side]
-        o = 6 * side
+        o = EDGE_MOMENTS_T2 if side else EDGE_MOMENTS_T1
         fx, fy, fz = emom[e, o], emom[e, o + 1], emom[e, o + 2]
         G[lk, 0] += f * fx
         G[lk, 1] += f * fy
