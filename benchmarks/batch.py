@@ -13,7 +13,11 @@ task submitted to last part written; the workers' start-up inside it, the cluste
 outside), the workers' CPU seconds over their busy seconds (their thread use: 1.00 is one
 core each), each worker's busy seconds, and the 1-minute load average before and after. Per
 backend: the speed-up (2 workers over 1, median over repeats), the parallel efficiency
-(speed-up / 2), and whether ``descriptors.parquet`` came out byte-identical.
+(speed-up / 2), and whether ``descriptors.parquet`` came out byte-identical. Before each
+repeat, what the machine itself gives: a loop of pure Python arithmetic (no memory traffic,
+no library) run alone and then as two processes at once; their speed-up is the most any
+two-process work can get at that moment (2.0 on two idle cores; less where the cores are
+shared with other machines' work or are one core's two hardware threads).
 
 ``row-cost``: one local worker with one row per task, against `compute_rows` on one thread in
 a fresh process of its own (spawned, as the worker is), on the same rows; the first row of
@@ -37,6 +41,7 @@ import json
 import multiprocessing
 import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -67,6 +72,30 @@ def _timings(out: Path) -> list[dict]:
     return [t for t in map(json.loads, lines) if "part" in t]
 
 
+#: The loop of `machine_speedup`: about 1.5 s of one core.
+_SPIN = """
+import time
+t = time.perf_counter()
+x = 0
+for i in range(15_000_000):
+    x += i * i
+print(time.perf_counter() - t)
+"""
+
+
+def machine_speedup(processes: int = 2) -> float:
+    """How many times one loop's work ``processes`` copies of it do in the same wall time.
+
+    The loop is pure Python arithmetic: what the cores give to work that shares nothing."""
+    spin = [sys.executable, "-c", _SPIN]
+    alone = float(subprocess.run(spin, capture_output=True, text=True, check=True).stdout)
+    start = time.perf_counter()
+    running = [subprocess.Popen(spin, stdout=subprocess.DEVNULL) for _ in range(processes)]
+    for process in running:
+        process.wait()
+    return processes * alone / (time.perf_counter() - start)
+
+
 def _warm(manifest: Path, backend: str) -> None:
     """Fill numba's disk cache, so that no worker compiles."""
     rows = read_manifest(manifest).rows[:1]
@@ -80,7 +109,13 @@ def throughput(args, manifest: Path, folder: Path) -> dict:
         _warm(manifest, backend)
         runs = {n: [] for n in counts}
         outs = {}
+        machine = []
         for repeat in range(args.repeat):
+            machine.append(machine_speedup(max(counts)))
+            print(
+                f"the machine: {max(counts)} loops at once over one: x{machine[-1]:.2f}",
+                flush=True,
+            )
             order = counts if repeat % 2 == 0 else counts[::-1]
             for n in order:
                 out = folder / f"{backend}-{n}-{repeat}"
@@ -118,16 +153,29 @@ def throughput(args, manifest: Path, folder: Path) -> dict:
             == (outs[counts[0]] / "descriptors.parquet").read_bytes()
             for n in counts
         )
-        result = {"runs": runs, "median_grasps_per_s": rate, "identical_bytes": same}
+        result = {
+            "runs": runs,
+            "median_grasps_per_s": rate,
+            "identical_bytes": same,
+            "machine_speedup": machine,
+        }
         for n in counts[1:]:
             speedup = rate[n] / rate[counts[0]]
             result[f"speedup_{n}"] = speedup
             result[f"efficiency_{n}"] = speedup * counts[0] / n
             print(
                 f"{backend}: {n} workers over {counts[0]}: x{speedup:.2f} (efficiency "
-                f"{speedup * counts[0] / n:.2f}); descriptors identical: {same}",
+                f"{speedup * counts[0] / n:.2f}); descriptors identical: {same}; the "
+                f"machine's own: x{statistics.median(machine):.2f} (median; "
+                f"{', '.join(f'{m:.2f}' for m in machine)})",
                 flush=True,
             )
+            per_repeat = [
+                runs[n][r]["grasps_per_s"] / runs[counts[0]][r]["grasps_per_s"]
+                for r in range(args.repeat)
+            ]
+            result[f"speedup_{n}_per_repeat"] = per_repeat
+            print(f"{backend}: per repeat: {', '.join(f'{x:.2f}' for x in per_repeat)}")
         figures[backend] = result
     return figures
 

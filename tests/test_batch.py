@@ -30,6 +30,8 @@ from exactgrasp.batch import BatchError, read_batch, read_manifest, run_batch
 from exactgrasp.batch.store import run_lock
 from exactgrasp.cli import main
 
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
 SAMPLER = eg.PathSampler(3, 2, 2, n_steps=3)
 BACKEND_PARAMS = {"object_resolution": 16, "hand_resolution": 24}
 PART_SIZE = 2
@@ -386,3 +388,46 @@ def test_a_script_without_the_main_guard_is_told_the_fix(tmp_path):
     assert f"run_batch was called while a worker process imported {script}" in done.stderr
     assert 'put the call under `if __name__ == "__main__":`' in done.stderr
     assert "in use by another" not in done.stderr
+
+
+def test_the_local_cluster_runs_with_the_quiet_settings():
+    # The profiler off and the housekeeping timers slowed, in the scheduler and in every worker
+    # the nannies start: what `WORKER_CONFIG` asks for reaches each process.
+    import dask
+
+    from exactgrasp.batch.worker import WORKER_CONFIG, open_pool
+
+    assert WORKER_CONFIG["distributed.worker.profile.enabled"] is False
+    assert WORKER_CONFIG["distributed.admin.tick.interval"] == "500ms"
+
+    def settings():
+        return {key: dask.config.get(key) for key in WORKER_CONFIG}
+
+    def scheduler_settings(dask_scheduler):
+        # The scheduler runs in this process, where the settings held only while it started.
+        return dask_scheduler._tick_interval, dask_scheduler.WORKER_SATURATION
+
+    with open_pool(2, None) as pool:
+        workers = pool.client.run(settings)
+        scheduler = pool.client.run_on_scheduler(scheduler_settings)
+    assert len(workers) == 2
+    assert all(seen == WORKER_CONFIG for seen in workers.values())
+    assert scheduler == (0.5, 1.0)
+
+
+def test_the_cluster_recipe_exports_the_local_clusters_settings():
+    import dask
+
+    from exactgrasp.batch.worker import WORKER_CONFIG, cluster_environment
+
+    env = cluster_environment()
+    # What dask reads back from those variables is the local cluster's settings.
+    read = dask.config.collect_env(env)
+    assert {key: dask.config.get(key, config=read) for key in WORKER_CONFIG} == WORKER_CONFIG
+    assert env["NUMBA_NUM_THREADS"] == "1"
+    exports = " ".join(
+        line.removeprefix("export ")
+        for line in (DOCS / "batch.md").read_text().splitlines()
+        if line.startswith("export ")
+    ).split()
+    assert sorted(exports) == sorted(f"{key}={value}" for key, value in env.items())

@@ -21,7 +21,7 @@ pytest.importorskip("pyarrow")
 
 import exactgrasp as eg
 from exactgrasp.batch import read_batch, run_batch
-from exactgrasp.batch.threads import THREAD_ENV
+from exactgrasp.batch.worker import cluster_environment
 
 SAMPLER = eg.PathSampler(4, 3, 3, n_steps=4)
 N_ROWS = 12
@@ -77,18 +77,20 @@ def test_command_line_cluster_survives_a_killed_worker(manifest, tmp_path):
         processes.append(
             _dask(
                 "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                "--scheduler-file", str(address_file), log=tmp_path / "scheduler.log",
+                "--scheduler-file", str(address_file), env=cluster_environment(),
+                log=tmp_path / "scheduler.log",
             )
         )  # fmt: skip
         _wait_for(address_file.exists, "scheduler file")
         _wait_for(lambda: "address" in address_file.read_text(), "scheduler address")
         address = json.loads(address_file.read_text())["address"]
-        # One thread a worker, the thread limits in its environment, as docs/batch.md says.
+        # One thread a worker, the thread limits and settings in its environment, as
+        # docs/batch.md says.
         for name in ("w0", "w1"):
             processes.append(
                 _dask(
                     "worker", address, "--nthreads", "1", "--name", name, "--no-dashboard",
-                    env=THREAD_ENV, log=tmp_path / f"{name}.log",
+                    env=cluster_environment(), log=tmp_path / f"{name}.log",
                 )
             )  # fmt: skip
         with Client(address) as client:

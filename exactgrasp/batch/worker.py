@@ -43,6 +43,7 @@ from exactgrasp.version import __version__
 __all__ = [
     "THREAD_ENV",
     "WORKER_CONFIG",
+    "cluster_environment",
     "compute_rows",
     "default_workers",
     "open_pool",
@@ -51,9 +52,37 @@ __all__ = [
 
 log = logging.getLogger("exactgrasp.batch")
 
-#: Dask settings of the local cluster's workers. The statistical profiler samples every
-#: thread's stack every 10 ms: off, a row costs in a worker what it costs in this process.
-WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
+#: Dask settings of the local cluster (its scheduler, nannies and workers). The statistical
+#: profiler samples every thread's stack every 10 ms: off, a row costs in a worker what it costs
+#: in this process. The event loops' tick (20 ms), the nannies' memory check (100 ms) and the
+#: system monitor (500 ms) wake every process of the cluster: at dask's defaults an idle
+#: two-worker cluster takes a tenth of a core from the rows, at these a fiftieth
+#: (docs/performance.md, "Batches"). A saturation of 1 hands a worker its next task when it
+#: finishes one, not one ahead: the last tasks go to whichever worker is free.
+WORKER_CONFIG = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "500ms",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.scheduler.worker-saturation": 1.0,
+}
+
+
+def cluster_environment() -> dict[str, str]:
+    """The environment of a cluster's processes started by hand (``dask scheduler``,
+    ``dask worker``): `THREAD_ENV` and `WORKER_CONFIG` as dask reads it from variables.
+
+    Returns
+    -------
+    dict of str to str
+        ``{"NUMBA_NUM_THREADS": "1", ..., "DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL": "500ms",
+        ...}``; ``docs/batch.md`` lists the same exports.
+    """
+    config = {
+        "DASK_" + key.upper().replace(".", "__").replace("-", "_"): str(value)
+        for key, value in WORKER_CONFIG.items()
+    }
+    return {**THREAD_ENV, **config}
 
 
 # -- on the workers -----------------------------------------------------------------------------
@@ -169,8 +198,8 @@ def compute_rows(
 
 
 def warm_up(backend: str | Backend) -> str:
-    """Ready this worker process before any row: threads limited (`limit_threads`), the
-    backend built, its compiled kernels loaded from numba's cache.
+    """Ready this worker process before any row: threads limited (`limit_threads`), MuJoCo
+    imported, the backend built, its compiled kernels loaded from numba's cache.
 
     The kernels load by computing one pose of a small made-up grasp (a box hand, a box
     object), whose hand is no dataset's: the hands the rows use are still prepared, and
@@ -186,6 +215,8 @@ def warm_up(backend: str | Backend) -> str:
         This worker, ``host:pid``.
     """
     limit_threads()
+    with contextlib.suppress(ImportError):  # without it, the rows that need it say so
+        import mujoco  # noqa: F401  (what compiles MJCF and URDF hands: 0.1-0.2 s to import)
     engine = _worker_backend(backend)
     hand = Hand.from_meshes([box((0.1, 0.1, 0.04))], frame=HandFrame.identity())
     pose = np.eye(4)
