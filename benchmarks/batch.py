@@ -25,6 +25,10 @@ each (compiling, loading, preparing the hand) is left out. Median ratio over the
 wall seconds and of the computing thread's CPU seconds (which the machine's load inflates
 much less).
 
+``idle``: the CPU seconds a local cluster of 2 workers takes in 10 s while it computes nothing
+(its scheduler, nannies and workers: dask's housekeeping, which the rows lose when every core
+computes), with dask's defaults and with `exactgrasp.batch.worker.WORKER_CONFIG`.
+
 The machine may be shared: compare figures only within one run of this script, and read the
 load averages printed beside them.
 
@@ -32,6 +36,7 @@ Usage::
 
     python benchmarks/batch.py throughput [--records 24] [--backends voxel,exact] [--repeat 1]
     python benchmarks/batch.py row-cost [--records 6] [--backends voxel] [--repeat 3]
+    python benchmarks/batch.py idle [--repeat 1]
 """
 
 from __future__ import annotations
@@ -230,9 +235,45 @@ def row_cost(args, manifest: Path, folder: Path) -> dict:
     return figures
 
 
+def _idle_cpu_seconds(config: dict, seconds: float = 10.0) -> float:
+    """CPU seconds of this process and its children while a 2-worker local cluster idles."""
+    import dask
+    import psutil
+    from distributed import Client, LocalCluster
+
+    from exactgrasp.batch.threads import THREAD_ENV
+
+    with dask.config.set(config):
+        cluster = LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+            silence_logs=50, env=THREAD_ENV,
+        )  # fmt: skip
+    with cluster, Client(cluster):
+        time.sleep(3.0)  # the workers' start-up done
+        processes = [psutil.Process(), *psutil.Process().children(recursive=True)]
+        before = [sum(p.cpu_times()[:2]) for p in processes]
+        time.sleep(seconds)
+        return sum(sum(p.cpu_times()[:2]) - b for p, b in zip(processes, before, strict=True))
+
+
+def idle(args) -> dict:
+    from exactgrasp.batch.worker import WORKER_CONFIG
+
+    figures = {"dask_defaults": [], "worker_config": []}
+    for repeat in range(args.repeat):
+        for name, config in (("dask_defaults", {}), ("worker_config", WORKER_CONFIG)):
+            figures[name].append(_idle_cpu_seconds(config))
+            print(
+                f"repeat {repeat}: an idle 2-worker cluster, {name}: "
+                f"{figures[name][-1]:.2f} CPU s in 10 s; load {os.getloadavg()[0]:.1f}",
+                flush=True,
+            )
+    return figures
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("mode", choices=["throughput", "row-cost"])
+    parser.add_argument("mode", choices=["throughput", "row-cost", "idle"])
     parser.add_argument("--records", type=int, default=None, help="rows (24; row-cost: 6)")
     parser.add_argument("--backends", default=None, help="voxel,exact (row-cost: voxel)")
     parser.add_argument("--workers", default="1,2", help="comma-separated worker counts")
@@ -243,6 +284,11 @@ def main() -> int:
     args.records = args.records or (6 if cost else 24)
     args.backends = args.backends or ("voxel" if cost else "voxel,exact")
     args.repeat = args.repeat or (3 if cost else 1)
+    if args.mode == "idle":
+        figures = idle(args)
+        if args.json:
+            args.json.write_text(json.dumps(figures, indent=1) + "\n")
+        return 0
     data = data_or_skip(args, f"{RECORDS}/README.md")
     if data is None:
         return 0

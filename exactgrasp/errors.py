@@ -276,6 +276,11 @@ class EvaluationError(ExactGraspError, ValueError):
     """Labelled pairs that cannot be evaluated: bad labels, unknown grasps, one class only."""
 
 
+def raised_here(filename: str) -> bool:
+    """Whether a warning or frame of this source file is exactgrasp's own."""
+    return filename.startswith(_PACKAGE_DIR)
+
+
 def warn_caller(message: str) -> None:
     """Warn at the first caller outside exactgrasp, however deep inside the package we are."""
     frame, level = sys._getframe(1), 2

@@ -17,7 +17,7 @@ import exactgrasp as eg
 from exactgrasp.errors import Fix, GraspFileError, JointError, MeshError, ModelError
 from exactgrasp.geometry.intake import UNITS
 from exactgrasp.grasp import FORMAT
-from exactgrasp.grasp.files import HAND_KEYS, OBJECT_KEYS, file_terms
+from exactgrasp.grasp.files import HAND_KEYS, OBJECT_KEYS, OBJECTS, file_terms
 from exactgrasp.grasp.schema import INFORMATIONAL, check_grasp_data, grasp_file_schema
 from exactgrasp.hands.barrett import barrett
 from exactgrasp.hands.builtins import BUILTIN_HANDS
@@ -214,6 +214,44 @@ def test_surface_samples_are_relative_to_the_grasp_file(tmp_path, monkeypatch):
     np.testing.assert_allclose(grasp.object.surface_samples[0], [0.01, 0, 0])
     saved = json.loads(grasp.save(tmp_path / "out" / "g.json").read_text())
     assert saved["object_surface_samples"] == "../box_P.ply"
+
+
+def test_an_object_is_read_once_per_file_and_warned_about_at_every_read(tmp_path):
+    # An inside-out box (its triangles reversed), 20 mm a side: read, flipped with a warning.
+    vertices, faces = box_arrays([-10, -10, -10], [10, 10, 10])
+    trimesh.Trimesh(vertices, faces[:, ::-1], process=False).export(tmp_path / "box.stl")
+    data = {
+        "object": "box.stl",
+        "object_units": "mm",
+        "object_pose_in_hand": POSE,
+        "hand": {"type": "builtin", "name": "barrett"},
+    }
+    for name in ("a", "b"):
+        (tmp_path / f"{name}.json").write_text(json.dumps(data))
+    builds = OBJECTS.builds
+    grasps = []
+    for name in ("a", "b", "a"):
+        with pytest.warns(UserWarning, match="inside-out") as caught:
+            grasps.append(eg.Grasp.from_file(tmp_path / f"{name}.json"))
+        # The warning points at this line, not inside the package.
+        assert any(w.filename == __file__ for w in caught)
+    assert OBJECTS.builds == builds + 1
+    assert grasps[0].object is grasps[1].object is grasps[2].object
+    assert grasps[0].object.volume == pytest.approx(8e-6, rel=1e-12)
+
+    # Another mesh in the same file (its bytes, not its time stamp) is read again: 40 mm a
+    # side, in its own winding.
+    trimesh.Trimesh(*box_arrays([-20, -20, -20], [20, 20, 20])).export(tmp_path / "box.stl")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        changed = eg.Grasp.from_file(tmp_path / "a.json")
+    assert OBJECTS.builds == builds + 2
+    assert changed.object.volume == pytest.approx(6.4e-5, rel=1e-12)
+    # Other units are another object.
+    data["object_units"] = "cm"
+    (tmp_path / "c.json").write_text(json.dumps(data))
+    assert eg.Grasp.from_file(tmp_path / "c.json").object.volume == pytest.approx(6.4e-2)
+    assert OBJECTS.builds == builds + 3
 
 
 # -- refused keys -----------------------------------------------------------------------------

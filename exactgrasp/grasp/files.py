@@ -9,11 +9,14 @@ text. Hands are read and written through `exactgrasp.hands.sources.HAND_SOURCES`
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
+import warnings
 from pathlib import Path
 from typing import Any
 
+from exactgrasp.cache import LRUCache
 from exactgrasp.errors import (
     ExactGraspError,
     Fix,
@@ -22,6 +25,8 @@ from exactgrasp.errors import (
     JointError,
     MeshError,
     ModelError,
+    raised_here,
+    warn_caller,
 )
 from exactgrasp.geometry.files import relative_path, resolve_path, write_ply
 from exactgrasp.geometry.intake import REPAIR, unit_scale
@@ -129,6 +134,43 @@ def _as_file_error(exc: ExactGraspError, source: str, key: str, keys: dict) -> E
 
 # -- reading and writing ---------------------------------------------------------------------
 
+#: Objects read from grasp files in this process, by file (path and SHA-256 of its bytes) and
+#: reading options: a dataset's grasps name a few objects many times each, and reading,
+#: checking and resolving a messy mesh costs more than a voxel descriptor.
+OBJECTS = LRUCache(32)
+
+
+def _file_content(path: Path) -> tuple[str, str | None]:
+    """(resolved path, SHA-256 of the bytes), or (path, None) when it cannot be read (the
+    reader then says why)."""
+    try:
+        return str(path.resolve()), hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return str(path), None
+
+
+def _read_solid(path: Path, units: str, repair: bool, samples: Any) -> Solid:
+    """`Solid.from_file`, kept in `OBJECTS`; exactgrasp's warnings about the mesh are given
+    again at every read, as a read without the cache would give them."""
+    if samples is None or isinstance(samples, str | os.PathLike):
+        found = None if samples is None else _file_content(Path(samples))
+        key = (_file_content(path), units, bool(repair), found)
+    else:
+        key = None  # samples given as an array: not cached
+
+    def build() -> tuple[Solid, list[str]]:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            solid = Solid.from_file(path, units=units, repair=repair, surface_samples=samples)
+        for other in (w for w in caught if not raised_here(w.filename)):
+            warnings.warn_explicit(other.message, other.category, other.filename, other.lineno)
+        return solid, [str(w.message) for w in caught if raised_here(w.filename)]
+
+    solid, notes = OBJECTS.get(key, build)
+    for note in notes:
+        warn_caller(note)
+    return solid
+
 
 def read_object(data: dict, base_dir: Path, source: str, overrides: dict) -> Solid:
     """The grasp's object, from ``object``, ``object_units``, ``object_repair``,
@@ -139,11 +181,8 @@ def read_object(data: dict, base_dir: Path, source: str, overrides: dict) -> Sol
         samples = resolve_path(base_dir, samples, source, "object_surface_samples")
     repair = overrides.get("repair", data.get("object_repair", REPAIR))
     try:
-        return Solid.from_file(
-            path,
-            units=overrides.get("units", data.get("object_units", "m")),
-            repair=repair,
-            surface_samples=samples,
+        return _read_solid(
+            path, overrides.get("units", data.get("object_units", "m")), repair, samples
         )
     except (MeshError, ModelError) as exc:
         raise _as_file_error(exc, source, "object", OBJECT_KEYS) from exc
