@@ -10,7 +10,7 @@ import pytest
 
 import exactgrasp as eg
 from exactgrasp.cli.main import main
-from exactgrasp.errors import ModelError
+from exactgrasp.errors import MissingDependencyError
 from exactgrasp.hands import dexterous
 
 HAVE_PACKAGE = importlib.util.find_spec("gymnasium_robotics") is not None
@@ -38,7 +38,7 @@ def test_the_five_finger_hands_are_built_in_names():
 
 def test_without_the_package_the_message_says_what_to_install(monkeypatch):
     monkeypatch.setattr(dexterous.importlib.util, "find_spec", lambda name: None)
-    with pytest.raises(ModelError, match=r"pip install \"exactgrasp\[hands\]\""):
+    with pytest.raises(MissingDependencyError, match=r"pip install \"exactgrasp\[hands\]\""):
         dexterous.model_file("adroit")
 
 

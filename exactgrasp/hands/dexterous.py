@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from exactgrasp.cache import LRUCache
-from exactgrasp.errors import ModelError
+from exactgrasp.errors import MissingDependencyError, ModelError
 
 if TYPE_CHECKING:
     from exactgrasp.hands.hand import Hand
@@ -73,16 +73,14 @@ def model_file(name: str) -> Path:
 
     Raises
     ------
+    MissingDependencyError
+        When ``gymnasium-robotics`` is not installed.
     ModelError
-        When ``gymnasium-robotics`` is not installed, or its file is missing.
+        When its file is missing.
     """
     spec = importlib.util.find_spec(PACKAGE[0])
     if spec is None or not spec.submodule_search_locations:
-        raise ModelError(
-            f"the built-in hand {name!r} is read from the package {PACKAGE[1]!r} (MIT "
-            f'licence), which is not installed; pip install "exactgrasp[hands]" (or '
-            f"{PACKAGE[1]}) to use it."
-        )
+        raise MissingDependencyError(f"the built-in hand {name!r}", PACKAGE[1], "hands")
     root = Path(next(iter(spec.submodule_search_locations))) / "envs" / "assets"
     path = root / DEXTEROUS_HANDS[name]["file"]
     if not path.is_file():
