@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -14,7 +15,14 @@ from exactgrasp.datapath import data_dir
 os.environ.setdefault("EXACTGRASP_NO_PROGRESS", "1")
 # The disk caches of one test run start empty and stay out of the user's cache folder (set
 # here, before any test, so that worker processes inherit it).
-os.environ["EXACTGRASP_CACHE"] = tempfile.mkdtemp(prefix="exactgrasp-test-cache-")
+TEST_CACHE = tempfile.mkdtemp(prefix="exactgrasp-test-cache-")
+os.environ["EXACTGRASP_CACHE"] = TEST_CACHE
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """Remove the run's disk caches (the worker processes that used them are gone by now)."""
+    shutil.rmtree(TEST_CACHE, ignore_errors=True)
+
 
 #: ``$EXACTGRASP_DATA``, else ``../shared/data`` beside the repository (`data_dir`).
 SHARED_DATA = data_dir()
