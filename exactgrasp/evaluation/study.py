@@ -392,15 +392,15 @@ def placed_grasps(
     return out, notes
 
 
-#: Largest back-off (m) of a gripper placement that is kept: most placements need 17 .. 20 mm
-#: to clear the open jaws (set after seeing that spread, before any AUC).
-GRIPPER_BACKOFF = 0.02
+#: Largest back-off (m) of a placement that is kept: most gripper placements need 17 .. 20 mm
+#: to clear the open jaws (set after seeing that spread, before any AUC); the Adroit hand
+#: opens flat, and a placement moved more than that off its palm is no longer the same
+#: placement either.
+MAX_BACKOFF = 0.02
 
 #: The hands of the hands section by built-in name (the Barrett is the shared data's), with
-#: the largest back-off kept for each: the gripper's as above; the Adroit hand opens flat,
-#: so a placement that had to move more than 20 mm off its palm is no longer the same
-#: placement either (the same bound, set before any AUC).
-OTHER_HANDS = {"parallel_gripper": GRIPPER_BACKOFF, "adroit": 0.02}
+#: the largest back-off kept for each.
+OTHER_HANDS = {"parallel_gripper": MAX_BACKOFF, "adroit": MAX_BACKOFF}
 #: Short names of the hands in the section's keys and grasp names.
 HAND_LABELS = {"barrett": "barrett", "parallel_gripper": "gripper", "adroit": "adroit"}
 
