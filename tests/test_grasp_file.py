@@ -253,6 +253,19 @@ def test_an_object_is_read_once_per_file_and_warned_about_at_every_read(tmp_path
     assert eg.Grasp.from_file(tmp_path / "c.json").object.volume == pytest.approx(6.4e-2)
     assert OBJECTS.builds == builds + 3
 
+    # A read that warns and then fails gives its warning and its error, and keeps nothing:
+    # the inside-out box read in metres is 20 m long.
+    trimesh.Trimesh(vertices, faces[:, ::-1], process=False).export(tmp_path / "box.stl")
+    data["object_units"] = "m"
+    (tmp_path / "d.json").write_text(json.dumps(data))
+    for _ in range(2):
+        with (
+            pytest.warns(UserWarning, match="inside-out"),
+            pytest.raises(GraspFileError, match="too large"),
+        ):
+            eg.Grasp.from_file(tmp_path / "d.json")
+    assert OBJECTS.builds == builds + 5
+
 
 # -- refused keys -----------------------------------------------------------------------------
 

@@ -159,11 +159,20 @@ def _read_solid(path: Path, units: str, repair: bool, samples: Any) -> Solid:
         key = None  # samples given as an array: not cached
 
     def build() -> tuple[Solid, list[str]]:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            solid = Solid.from_file(path, units=units, repair=repair, surface_samples=samples)
-        for other in (w for w in caught if not raised_here(w.filename)):
-            warnings.warn_explicit(other.message, other.category, other.filename, other.lineno)
+        caught: list[warnings.WarningMessage] = []
+        read = False
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                solid = Solid.from_file(path, units=units, repair=repair, surface_samples=samples)
+            read = True
+        finally:
+            # Other libraries' warnings once, as they came; ours here too when the read fails.
+            for w in caught:
+                if not raised_here(w.filename):
+                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+                elif not read:
+                    warn_caller(str(w.message))
         return solid, [str(w.message) for w in caught if raised_here(w.filename)]
 
     solid, notes = OBJECTS.get(key, build)
