@@ -25,6 +25,12 @@ each (compiling, loading, preparing the hand) is left out. Median ratio over the
 wall seconds and of the computing thread's CPU seconds (which the machine's load inflates
 much less).
 
+``contention``: one row per task, 1 and 2 workers, alternating; per repeat, the median over
+the rows (each worker's first left out: it prepares the hand) of a row's CPU seconds on its
+computing thread with 2 workers over the same row's with 1. Above 1, the same work costs more
+CPU while the other core computes too: what the cores share (caches, memory, the host), not
+the batch.
+
 ``idle``: the CPU seconds a local cluster of 2 workers takes in 10 s while it computes nothing
 (its scheduler, nannies and workers: dask's housekeeping, which the rows lose when every core
 computes), with dask's defaults and with `exactgrasp.batch.worker.WORKER_CONFIG`.
@@ -36,6 +42,7 @@ Usage::
 
     python benchmarks/batch.py throughput [--records 24] [--backends voxel,exact] [--repeat 1]
     python benchmarks/batch.py row-cost [--records 6] [--backends voxel] [--repeat 3]
+    python benchmarks/batch.py contention [--records 24] [--backends voxel] [--repeat 3]
     python benchmarks/batch.py idle [--repeat 1]
 """
 
@@ -235,6 +242,35 @@ def row_cost(args, manifest: Path, folder: Path) -> dict:
     return figures
 
 
+def contention(args, manifest: Path, folder: Path) -> dict:
+    figures = {}
+    for backend in args.backends.split(","):
+        _warm(manifest, backend)
+        ratios = []
+        for repeat in range(args.repeat):
+            rows = {}
+            for n in (1, 2) if repeat % 2 == 0 else (2, 1):
+                out = folder / f"contention-{backend}-{n}-{repeat}"
+                run_batch(manifest, out, backend=backend, workers=n, part_size=1, progress=False)
+                rows[n] = {t["first_row"]: t for t in _timings(out)}
+            firsts = {r for r, t in rows[2].items() if t["links_prepared"]} | {0}
+            ratios.append(
+                statistics.median(
+                    rows[2][r]["thread_cpu_seconds"] / rows[1][r]["thread_cpu_seconds"]
+                    for r in rows[1]
+                    if r not in firsts
+                )
+            )
+            print(
+                f"{backend} repeat {repeat}: a row's CPU s with 2 workers over 1, median over "
+                f"{len(rows[1]) - len(firsts)} rows: x{ratios[-1]:.3f}; load "
+                f"{os.getloadavg()[0]:.1f}",
+                flush=True,
+            )
+        figures[backend] = {"median_cpu_ratio_per_repeat": ratios}
+    return figures
+
+
 def _idle_cpu_seconds(config: dict, seconds: float = 10.0) -> float:
     """CPU seconds of this process and its children while a 2-worker local cluster idles."""
     import dask
@@ -273,7 +309,7 @@ def idle(args) -> dict:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("mode", choices=["throughput", "row-cost", "idle"])
+    parser.add_argument("mode", choices=["throughput", "row-cost", "contention", "idle"])
     parser.add_argument("--records", type=int, default=None, help="rows (24; row-cost: 6)")
     parser.add_argument("--backends", default=None, help="voxel,exact (row-cost: voxel)")
     parser.add_argument("--workers", default="1,2", help="comma-separated worker counts")
@@ -282,8 +318,9 @@ def main() -> int:
     args = parser.parse_args()
     cost = args.mode == "row-cost"
     args.records = args.records or (6 if cost else 24)
-    args.backends = args.backends or ("voxel" if cost else "voxel,exact")
-    args.repeat = args.repeat or (3 if cost else 1)
+    one = args.mode in ("row-cost", "contention")
+    args.backends = args.backends or ("voxel" if one else "voxel,exact")
+    args.repeat = args.repeat or (3 if one else 1)
     if args.mode == "idle":
         figures = idle(args)
         if args.json:
@@ -300,7 +337,8 @@ def main() -> int:
             f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}",
             flush=True,
         )
-        figures = (row_cost if cost else throughput)(args, manifest, folder)
+        mode = {"throughput": throughput, "row-cost": row_cost, "contention": contention}
+        figures = mode[args.mode](args, manifest, folder)
     if args.json:
         args.json.write_text(json.dumps(figures, indent=1) + "\n")
     return 0
