@@ -14,12 +14,15 @@ from exactgrasp.datapath import data_dir
 
 os.environ.setdefault("EXACTGRASP_NO_PROGRESS", "1")
 # The disk caches of one test run start empty and stay out of the user's cache folder (set
-# here, before any test, so that worker processes inherit it).
-TEST_CACHE = tempfile.mkdtemp(prefix="exactgrasp-test-cache-")
-os.environ["EXACTGRASP_CACHE"] = TEST_CACHE
+# here, before any test, so that worker processes inherit it). Once per process: test modules
+# that import this file as `tests.conftest` run it a second time.
+if os.environ.get("EXACTGRASP_TEST_CACHE_PROCESS") != str(os.getpid()):
+    os.environ["EXACTGRASP_CACHE"] = tempfile.mkdtemp(prefix="exactgrasp-test-cache-")
+    os.environ["EXACTGRASP_TEST_CACHE_PROCESS"] = str(os.getpid())
+TEST_CACHE = os.environ["EXACTGRASP_CACHE"]
 
 
-def pytest_sessionfinish(session, exitstatus):
+def pytest_sessionfinish():
     """Remove the run's disk caches (the worker processes that used them are gone by now)."""
     shutil.rmtree(TEST_CACHE, ignore_errors=True)
 
