@@ -82,6 +82,25 @@ def kernel_sources_digest() -> str:
     return digest.hexdigest()
 
 
+def code_digest(*modules: str | os.PathLike) -> str:
+    """`kernel_sources_digest` and the SHA-256 of each of ``modules`` (the source files that
+    compute a disk cache's entries): part of that cache's keys, so that an edit to any of them
+    starts it afresh.
+
+    Parameters
+    ----------
+    *modules : path-like
+        Source files, usually the caller's ``__file__``.
+
+    Returns
+    -------
+    str
+        ``"<kernel sources>/<module>/..."``, SHA-256 hex digests.
+    """
+    own = [hashlib.sha256(Path(module).read_bytes()).hexdigest() for module in modules]
+    return "/".join([kernel_sources_digest(), *own])
+
+
 class _KernelCache(FunctionCache):
     """numba's on-disk cache of one function, its entries keyed also on
     `kernel_sources_digest`."""

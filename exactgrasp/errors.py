@@ -276,9 +276,20 @@ class EvaluationError(ExactGraspError, ValueError):
     """Labelled pairs that cannot be evaluated: bad labels, unknown grasps, one class only."""
 
 
-def raised_here(filename: str) -> bool:
-    """Whether a warning or frame of this source file is exactgrasp's own."""
-    return filename.startswith(_PACKAGE_DIR)
+def outside_caller() -> tuple[str, int]:
+    """(file, line) of the first caller outside exactgrasp: where a `warn_caller` warning given
+    now, from inside the package, is attributed."""
+    frame = sys._getframe(1)
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame = frame.f_back
+    return ("", 0) if frame is None else (frame.f_code.co_filename, frame.f_lineno)
+
+
+def warned_here(warning: warnings.WarningMessage, site: tuple[str, int]) -> bool:
+    """Whether a caught warning is exactgrasp's own: attributed to a line of the package, or
+    to ``site``, the `outside_caller` of the code that caught it, where `warn_caller` puts
+    exactgrasp's warnings (another library's is attributed to its own code, or to ours)."""
+    return warning.filename.startswith(_PACKAGE_DIR) or (warning.filename, warning.lineno) == site
 
 
 def warn_caller(message: str) -> None:

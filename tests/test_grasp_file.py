@@ -6,6 +6,8 @@ from __future__ import annotations
 import inspect
 import json
 import re
+import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -14,9 +16,11 @@ import pytest
 import trimesh
 
 import exactgrasp as eg
+from exactgrasp.cache import LRUCache
 from exactgrasp.errors import Fix, GraspFileError, JointError, MeshError, ModelError
+from exactgrasp.geometry import solid as solid_module
 from exactgrasp.geometry.intake import UNITS
-from exactgrasp.grasp import FORMAT
+from exactgrasp.grasp import FORMAT, files
 from exactgrasp.grasp.files import HAND_KEYS, OBJECT_KEYS, OBJECTS, file_terms
 from exactgrasp.grasp.schema import INFORMATIONAL, check_grasp_data, grasp_file_schema
 from exactgrasp.hands.barrett import barrett
@@ -265,6 +269,75 @@ def test_an_object_is_read_once_per_file_and_warned_about_at_every_read(tmp_path
         ):
             eg.Grasp.from_file(tmp_path / "d.json")
     assert OBJECTS.builds == builds + 5
+
+
+def test_a_resolved_object_is_kept_on_disk_for_every_process(tmp_path, monkeypatch):
+    # Two 20 mm cubes in one file, the second 10 mm along x: the solid they bound is a
+    # 30 x 20 x 20 mm box, which reading resolves them into with a warning.
+    first = box_arrays([-10, -10, -10], [10, 10, 10])
+    second = box_arrays([0, -10, -10], [20, 10, 10])
+    mesh = trimesh.Trimesh(
+        np.vstack([first[0], second[0]]), np.vstack([first[1], second[1] + len(first[0])])
+    )
+    mesh.export(tmp_path / "two.stl")
+    data = {
+        "object": "two.stl",
+        "object_units": "mm",
+        "object_pose_in_hand": POSE,
+        "hand": {"type": "builtin", "name": "barrett"},
+    }
+    (tmp_path / "a.json").write_text(json.dumps(data))
+    # Counted where the mesh file is loaded, a call that has returned before any warning.
+    reads = []
+    real = solid_module.load_trimesh
+    monkeypatch.setattr(
+        solid_module, "load_trimesh", lambda path: reads.append(path) or real(path)
+    )
+    with pytest.warns(UserWarning, match="2 shells") as given:
+        read = eg.Grasp.from_file(tmp_path / "a.json").object
+    assert len(reads) == 1
+    assert read.volume == pytest.approx(1.2e-5, rel=1e-12)
+    assert read.shell_report["n_shells"] == 2 and read.shell_report["actions"]
+
+    # As another process: its own memory cache, the same disk cache. The mesh is not read
+    # again; the solid, its reports and its warnings are the same.
+    monkeypatch.setattr(files, "OBJECTS", LRUCache(32))
+    with pytest.warns(UserWarning, match="2 shells") as again:
+        kept = eg.Grasp.from_file(tmp_path / "a.json").object
+    assert len(reads) == 1
+    assert [str(w.message) for w in again] == [str(w.message) for w in given]
+    # Kept in memory now, and still warned about, at this line.
+    with pytest.warns(UserWarning, match="2 shells") as third:
+        assert eg.Grasp.from_file(tmp_path / "a.json").object is kept
+    assert [(w.filename, str(w.message)) for w in third] == [
+        (__file__, str(w.message)) for w in given
+    ]
+    assert kept.volume == read.volume  # a cached property of `read` already
+    assert set(vars(kept)) == set(vars(read))
+    for name, value in vars(read).items():
+        if isinstance(value, np.ndarray):
+            assert np.array_equal(getattr(kept, name), value), name
+        else:
+            assert getattr(kept, name) == value, name
+
+    # A process of its own, where reading the mesh would fail: the solid comes from the disk.
+    program = (
+        "import warnings, exactgrasp as eg\n"
+        "from exactgrasp.geometry.solid import Solid\n"
+        "def refuse(*a, **k): raise AssertionError('read again')\n"
+        "Solid.from_file = refuse\n"
+        "warnings.simplefilter('ignore')\n"
+        f"print(eg.Grasp.from_file({str(tmp_path / 'a.json')!r}).object.volume)\n"
+    )
+    run = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert float(run.stdout) == read.volume
+
+    # Other bytes in the file are another object, read again: one 20 mm cube.
+    trimesh.Trimesh(*first).export(tmp_path / "two.stl")
+    monkeypatch.setattr(files, "OBJECTS", LRUCache(32))
+    assert eg.Grasp.from_file(tmp_path / "a.json").object.volume == pytest.approx(8e-6)
+    assert len(reads) == 2
 
 
 # -- refused keys -----------------------------------------------------------------------------

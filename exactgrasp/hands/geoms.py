@@ -6,9 +6,7 @@ With ``repair=True`` a mesh geom that is not a closed solid is repaired as
 
 from __future__ import annotations
 
-import hashlib
 import warnings
-from pathlib import Path
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -16,7 +14,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from exactgrasp.cache import DiskCache
-from exactgrasp.compiling import kernel_sources_digest
+from exactgrasp.compiling import code_digest
 from exactgrasp.errors import Fix, MeshError, ModelError, warn_caller
 from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
@@ -62,16 +60,10 @@ GEOM_KIND.update({5: "cylinder", 6: "box", 7: "mesh", 8: "sdf"})
 JOINT_FREE, JOINT_BALL, JOINT_SLIDE, JOINT_HINGE = range(4)
 
 
-def _welding_version() -> str:
-    """The package version, the sources of the geometry room (among the kernels' sources) and
-    of this module: an edit to any of them starts the cache afresh."""
-    own = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
-    return f"{__version__}/{kernel_sources_digest()}/{own}"
-
-
 #: Welded, resolved link meshes on disk, keyed on the arrays MuJoCo read from the mesh file and
-#: on the source of the code that welds and resolves them.
-WELDED = DiskCache("solids", version=_welding_version)
+#: on the package version and the sources of the code that welds and resolves them (the
+#: geometry room, among the kernels' sources, and this module).
+WELDED = DiskCache("solids", version=lambda: f"{__version__}/{code_digest(__file__)}")
 
 
 def weld_mesh(
