@@ -9,16 +9,16 @@ row uses the same Barrett hand at its own joint angles.
 ``throughput``: for each backend, `exactgrasp.batch.run_batch` with **default options**
 (sampler, backend parameters, part size) and 1 and 2 local workers, alternating which goes
 first from one repeat to the next, the disk caches (numba's kernels, the rows' resolved
-objects) filled beforehand as any later run over a dataset finds them. Reported per run: grasps/s over ``compute_seconds`` (first
-task submitted to last part written; the workers' start-up inside it, the cluster's start
-outside), the workers' CPU seconds over their busy seconds (their thread use: 1.00 is one
-core each), each worker's busy seconds, and the 1-minute load average before and after. Per
-backend: the speed-up (2 workers over 1, median over repeats), the parallel efficiency
-(speed-up / 2), and whether ``descriptors.parquet`` came out byte-identical. Before each
-repeat, what the machine itself gives: a loop of pure Python arithmetic (no memory traffic,
-no library) run alone and then as two processes at once; their speed-up is the most any
-two-process work can get at that moment (2.0 on two idle cores; less where the cores are
-shared with other machines' work or are one core's two hardware threads).
+objects) filled beforehand as any later run over a dataset finds them. Reported per run:
+grasps/s over ``compute_seconds`` (first task submitted to last part written; the workers'
+start-up inside it, the cluster's start outside), the workers' CPU seconds over their busy
+seconds (their thread use: 1.00 is one core each), each worker's busy seconds, and the 1-minute
+load average before and after. Per backend: the speed-up (2 workers over 1, median over
+repeats), the parallel efficiency (speed-up / 2), and whether ``descriptors.parquet`` came out
+byte-identical. Before each repeat, what the machine itself gives: a loop of pure Python
+arithmetic (no memory traffic, no library) run alone and then as two processes at once; their
+speed-up is the most any two-process work can get at that moment (2.0 on two idle cores; less
+where the cores are shared with other machines' work or are one core's two hardware threads).
 
 ``row-cost``: one local worker with one row per task, against `compute_rows` on one thread in
 a fresh process of its own (spawned, as the worker is), on the same rows; the first row of
