@@ -333,11 +333,19 @@ def test_a_resolved_object_is_kept_on_disk_for_every_process(tmp_path, monkeypat
     assert run.returncode == 0, run.stderr
     assert float(run.stdout) == read.volume
 
+    # Surface samples given as an array: not kept, read again and warned about each time.
+    points = np.array([[0.0, 0.0, 10.0], [15.0, 0.0, 10.0]])
+    for expected_reads in (2, 3):
+        with pytest.warns(UserWarning, match="2 shells"):
+            grasp = eg.Grasp.from_file(tmp_path / "a.json", surface_samples=points)
+        assert len(reads) == expected_reads
+        assert grasp.object.volume == pytest.approx(1.2e-5, rel=1e-12)
+
     # Other bytes in the file are another object, read again: one 20 mm cube.
     trimesh.Trimesh(*first).export(tmp_path / "two.stl")
     monkeypatch.setattr(files, "OBJECTS", LRUCache(32))
     assert eg.Grasp.from_file(tmp_path / "a.json").object.volume == pytest.approx(8e-6)
-    assert len(reads) == 2
+    assert len(reads) == 4
 
 
 # -- refused keys -----------------------------------------------------------------------------

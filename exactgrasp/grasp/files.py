@@ -165,41 +165,33 @@ def _file_content(path: Path) -> tuple[str, str | None]:
 
 def _read_solid(path: Path, units: str, repair: bool, samples: Any) -> Solid:
     """`Solid.from_file`, kept in `OBJECTS` and `OBJECT_SOLIDS`; exactgrasp's warnings about
-    the mesh are given again at every read, as a read without the caches would give them."""
-    if samples is not None and not isinstance(samples, str | os.PathLike):
-        return _read_giving_warnings(path, units, repair, samples)[0]  # an array: not cached
-    found = None if samples is None else _file_content(Path(samples))
-    key = (_file_content(path), units, bool(repair), found)
+    the mesh are given again at every read, as a read without the caches would give them, and
+    other libraries' once per process."""
+    key = None  # samples given as an array: not cached
+    if samples is None or isinstance(samples, str | os.PathLike):
+        found = None if samples is None else _file_content(Path(samples))
+        key = (_file_content(path), units, bool(repair), found)
+
+    def read() -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        solid, ours, others = _read_recording_warnings(path, units, repair, samples)
+        arrays = {"vertices": solid.vertices, "faces": solid.faces}
+        if solid.surface_samples is not None:
+            arrays["surface_samples"] = solid.surface_samples
+        reports = {name: getattr(solid, name) for name in _SOLID_RECORD}
+        return arrays, {**reports, "ours": ours, "others": others}
 
     def build() -> tuple[Solid, list[str]]:
-        if key[0][1] is None or (found is not None and found[1] is None):
-            return _read_giving_warnings(path, units, repair, samples)[:2]  # the reader says why
-        read_now = []
-
-        def read() -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-            solid, ours, others = _read_giving_warnings(path, units, repair, samples)
-            read_now.append(True)
-            arrays = {"vertices": solid.vertices, "faces": solid.faces}
-            if solid.surface_samples is not None:
-                arrays["surface_samples"] = solid.surface_samples
-            record = {
-                "shell_report": solid.shell_report,
-                "repair_report": solid.repair_report,
-                "source": solid.source,
-                "ours": ours,
-                "others": others,
-            }
-            return arrays, record
-
-        arrays, record = OBJECT_SOLIDS.get(OBJECT_SOLIDS.key([repr(key), str(path)]), read)
-        if not read_now:  # other libraries' warnings once per process, as a read gives them
-            for message, category in record["others"]:
-                warnings.warn(message, _warning_class(category), stacklevel=2)
+        if key is None or key[0][1] is None or (key[3] is not None and key[3][1] is None):
+            arrays, record = read()  # not kept on disk; an unreadable file: the reader says why
+        else:
+            arrays, record = OBJECT_SOLIDS.get(OBJECT_SOLIDS.key([repr(key), str(path)]), read)
+        for message, category, filename, lineno in record["others"]:
+            warnings.warn_explicit(message, _warning_class(category), filename, lineno)
         solid = Solid._trusted(
             arrays["vertices"], arrays["faces"], str(path), arrays.get("surface_samples")
         )
-        solid.shell_report, solid.repair_report = record["shell_report"], record["repair_report"]
-        solid.source = record["source"]
+        for name in _SOLID_RECORD:
+            setattr(solid, name, record[name])
         return solid, record["ours"]
 
     solid, notes = OBJECTS.get(key, build)
@@ -208,33 +200,41 @@ def _read_solid(path: Path, units: str, repair: bool, samples: Any) -> Solid:
     return solid
 
 
-def _read_giving_warnings(
+#: What `Solid.from_file` sets beside the arrays, kept with them in `OBJECT_SOLIDS`.
+_SOLID_RECORD = ("shell_report", "repair_report", "source")
+
+
+def _read_recording_warnings(
     path: Path, units: str, repair: bool, samples: Any
-) -> tuple[Solid, list[str], list[list[str]]]:
-    """`Solid.from_file`, giving other libraries' warnings as they come and keeping
-    exactgrasp's own for the caller to give (all given at once when the read fails).
+) -> tuple[Solid, list[str], list[tuple[str, str, str, int]]]:
+    """`Solid.from_file` and the warnings it gave, for the caller to give (all given here when
+    the read fails).
 
     Returns
     -------
-    (Solid, list of str, list of [str, str])
-        The solid, exactgrasp's warnings, and other libraries' as (message, category name).
+    (Solid, list of str, list of (str, str, str, int))
+        The solid, exactgrasp's warnings, and other libraries' as (message, category name,
+        file, line).
     """
     caught: list[warnings.WarningMessage] = []
     site = outside_caller()
-    read = False
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             solid = Solid.from_file(path, units=units, repair=repair, surface_samples=samples)
-        read = True
-    finally:
+    except Exception:
         for w in caught:
-            if not warned_here(w, site):
-                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-            elif not read:
+            if warned_here(w, site):
                 warn_caller(str(w.message))
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        raise
     ours = [str(w.message) for w in caught if warned_here(w, site)]
-    others = [[str(w.message), w.category.__name__] for w in caught if not warned_here(w, site)]
+    others = [
+        (str(w.message), w.category.__name__, w.filename, w.lineno)
+        for w in caught
+        if not warned_here(w, site)
+    ]
     return solid, ours, others
 
 
