@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     import argparse
     from collections.abc import Callable
+    from types import FrameType
 
 _PACKAGE_DIR = str(Path(__file__).resolve().parent)
 
@@ -276,12 +277,19 @@ class EvaluationError(ExactGraspError, ValueError):
     """Labelled pairs that cannot be evaluated: bad labels, unknown grasps, one class only."""
 
 
+def _first_outside(frame: FrameType | None) -> tuple[FrameType | None, int]:
+    """The first frame at or above ``frame`` whose code is not exactgrasp's, and how many
+    frames up from ``frame`` it is."""
+    steps = 0
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame, steps = frame.f_back, steps + 1
+    return frame, steps
+
+
 def outside_caller() -> tuple[str, int]:
     """(file, line) of the first caller outside exactgrasp: where a `warn_caller` warning given
     now, from inside the package, is attributed."""
-    frame = sys._getframe(1)
-    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
-        frame = frame.f_back
+    frame, _ = _first_outside(sys._getframe(1))
     return ("", 0) if frame is None else (frame.f_code.co_filename, frame.f_lineno)
 
 
@@ -294,10 +302,8 @@ def warned_here(warning: warnings.WarningMessage, site: tuple[str, int]) -> bool
 
 def warn_caller(message: str) -> None:
     """Warn at the first caller outside exactgrasp, however deep inside the package we are."""
-    frame, level = sys._getframe(1), 2
-    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
-        frame, level = frame.f_back, level + 1
-    warnings.warn(message, UserWarning, stacklevel=level)
+    _, steps = _first_outside(sys._getframe(1))
+    warnings.warn(message, UserWarning, stacklevel=2 + steps)
 
 
 def run_reporting_errors(
