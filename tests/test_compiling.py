@@ -83,3 +83,22 @@ def test_kernel_sources_digest_covers_callee_and_constant_modules(tmp_path, monk
         monkeypatch.undo()
         compiling.kernel_sources_digest.cache_clear()
     assert compiling.kernel_sources_digest() == digest
+
+
+def test_disk_caches_are_keyed_on_the_version_and_the_code_that_fills_them(tmp_path):
+    from exactgrasp import compiling
+    from exactgrasp.grasp import files
+    from exactgrasp.hands import geoms
+    from exactgrasp.version import __version__
+
+    module = tmp_path / "reader.py"
+    module.write_text("x = 1\n")
+    before = compiling.code_digest(module)
+    assert before.split("/")[0] == compiling.kernel_sources_digest()
+    module.write_text("x = 2\n")
+    assert compiling.code_digest(module) != before
+    # The objects' and the link meshes' caches: each the version, the kernels' sources (the
+    # geometry room among them) and its own module.
+    for cache, source in ((files.OBJECT_SOLIDS, files.__file__), (geoms.WELDED, geoms.__file__)):
+        assert cache.version == f"{__version__}/{compiling.code_digest(source)}"
+    assert files.OBJECT_SOLIDS.kind != geoms.WELDED.kind
