@@ -15,6 +15,15 @@ from typing import Any
 import numpy as np
 
 
+def mesh_key(vertices: np.ndarray, faces: np.ndarray) -> str:
+    """SHA-256 (hex) of a mesh's vertex (float64) and face (int64) arrays: its content, the key
+    of what is prepared once per mesh (link solids, BVHs)."""
+    digest = hashlib.sha256()
+    digest.update(np.ascontiguousarray(vertices, dtype=np.float64).tobytes())
+    digest.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
+    return digest.hexdigest()
+
+
 class LRUCache:
     """A bounded mapping that keeps the most recently used values.
 

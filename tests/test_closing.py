@@ -95,6 +95,20 @@ def test_engines_agree_and_hand_returned(cylinder_grasp):
         assert closed["coal"].joints[name] == pytest.approx(closed["fcl"].joints[name], abs=1e-6)
 
 
+def test_each_link_mesh_gets_one_bvh_per_process(cylinder_grasp):
+    """The built-in hand's 9 links have 4 distinct meshes: closing builds their 4 BVHs and the
+    can's, and a second closing, from another spread, builds none."""
+    from exactgrasp.geometry.bvh import BVHS
+
+    hand, obj, pose = cylinder_grasp
+    BVHS.clear()
+    builds = BVHS.builds
+    close_fingers(hand, obj, pose)
+    assert BVHS.builds - builds == 4 + 1
+    close_fingers(eg.hands.barrett({"finger_1_prox_joint": 0.3}), obj, pose)
+    assert BVHS.builds - builds == 4 + 1
+
+
 def test_coupled_distals_close_through_their_medials(cylinder_grasp):
     _, obj, pose = cylinder_grasp
     hand = eg.hands.barrett(distal_coupling=True)

@@ -1,7 +1,9 @@
 """The coal / python-fcl adapter: BVHs of triangle meshes, their distances, whole-pose culling.
 
 The only module of exactgrasp that imports coal or fcl (both optional, extra ``exact``). Both
-libraries take int64 triangles.
+libraries take int64 triangles. `cached_bvh` builds a BVH once per engine and mesh content in
+a process (kept in `BVHS`), to be posed by a rigid transform for each query: finger closing's
+link BVHs, whatever the joint angles.
 """
 
 from __future__ import annotations
@@ -11,14 +13,17 @@ from typing import Any
 
 import numpy as np
 
+from exactgrasp.cache import LRUCache, mesh_key
 from exactgrasp.errors import require
 
 __all__ = [
+    "BVHS",
     "DEFAULT_ENGINE",
     "ENGINES",
     "MeshPair",
     "available_engines",
     "build_bvh",
+    "cached_bvh",
     "distance",
     "require_engine",
 ]
@@ -27,6 +32,9 @@ __all__ = [
 ENGINES = {"coal": ("coal", "coal"), "fcl": ("fcl", "python-fcl")}
 #: The engine used unless one is asked for.
 DEFAULT_ENGINE = "coal"
+#: BVHs this process has built, by engine and mesh content (`cached_bvh`); ``BVHS.builds``
+#: counts them.
+BVHS = LRUCache(512)
 
 
 def require_engine(engine: str, feature: str | None = None) -> Any:
@@ -90,6 +98,12 @@ def build_bvh(engine: str, V: np.ndarray, F: np.ndarray) -> Any:
         bvh.addSubModel(V, F)
     bvh.endModel()
     return bvh
+
+
+def cached_bvh(engine: str, V: np.ndarray, F: np.ndarray) -> Any:
+    """`build_bvh` of a mesh, built once per engine and content (`exactgrasp.cache.mesh_key`)
+    in this process and kept in `BVHS`; same parameters and result."""
+    return BVHS.get((engine, mesh_key(V, F)), lambda: build_bvh(engine, V, F))
 
 
 def _coal_transform(coal, pose: np.ndarray):

@@ -1,22 +1,19 @@
 """The geometric engine of finger closing: the contact scene, the back-off, one finger's advance.
 
-`ContactScene` holds the BVHs of a hand model's links and of the object (built through
-`exactgrasp.geometry.bvh`, kept in an `exactgrasp.cache.LRUCache` keyed by geometry) and the
-object pose; `backoff` moves the object out of an open hand that penetrates it; `close_finger`
-closes one finger by conservative advancement on exact mesh distances, with bisection as the
-safety net, each joint in its direction (`infer_directions` when none is given). The public
-API is `exactgrasp.grasp.closing`.
+`ContactScene` holds the BVHs of a hand model's links and of the object (built once per
+content by `exactgrasp.geometry.bvh.cached_bvh`) and the object pose; `backoff` moves the
+object out of an open hand that penetrates it; `close_finger` closes one finger by
+conservative advancement on exact mesh distances, with bisection as the safety net, each
+joint in its direction (`infer_directions` when none is given). The public API is
+`exactgrasp.grasp.closing`.
 """
 
 from __future__ import annotations
 
-import hashlib
-
 import numpy as np
 
-from exactgrasp.cache import LRUCache
 from exactgrasp.errors import ClosingError, Fix
-from exactgrasp.geometry.bvh import build_bvh, distance, require_engine
+from exactgrasp.geometry.bvh import cached_bvh, distance, require_engine
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.geometry.winding import winding_number
 from exactgrasp.hands.hand import Hand
@@ -41,8 +38,6 @@ BACKOFF_STEP = 1e-3
 ADVANCE = 0.9
 #: Most advancement steps per finger before giving up.
 MAX_STEPS = 20_000
-#: BVHs of link sets and objects, keyed by engine and geometry digest.
-_BVHS = LRUCache(32)
 
 
 def palm_normal(hand: Hand) -> np.ndarray | None:
@@ -52,14 +47,6 @@ def palm_normal(hand: Hand) -> np.ndarray | None:
         return np.asarray(palm["normal"], dtype=np.float64)
     spec = getattr(hand.model, "palm", None)
     return None if spec is None else np.asarray(spec.normal, dtype=np.float64)
-
-
-def _mesh_digest(meshes: list[tuple[np.ndarray, np.ndarray]]) -> str:
-    digest = hashlib.sha256()
-    for V, F in meshes:
-        digest.update(np.ascontiguousarray(V).tobytes())
-        digest.update(np.ascontiguousarray(F).tobytes())
-    return digest.hexdigest()
 
 
 class ContactScene:
@@ -87,13 +74,8 @@ class ContactScene:
             for c, (V, _) in zip(centres, self.meshes, strict=True)
         ]
         self.spheres = list(zip(centres, radii, strict=True))  # link frame, for the speed bound
-        self.links = _BVHS.get(
-            (engine, "links", _mesh_digest(self.meshes)),
-            lambda: [build_bvh(engine, V, F) for V, F in self.meshes],
-        )
-        self.object_bvh = _BVHS.get(
-            (engine, "object", obj.hash), lambda: build_bvh(engine, obj.vertices, obj.faces)
-        )
+        self.links = [cached_bvh(engine, V, F) for V, F in self.meshes]
+        self.object_bvh = cached_bvh(engine, obj.vertices, obj.faces)
 
     def distance(self, i: int, link_pose: np.ndarray) -> float:
         """Distance from link ``i`` to the object (m); 0 when their surfaces cross."""

@@ -15,15 +15,14 @@ which is how the tests see that each distinct hand is prepared once per worker.
 
 from __future__ import annotations
 
-import hashlib
 from typing import Any
 
 import numpy as np
 
-from exactgrasp.cache import LRUCache
+from exactgrasp.cache import LRUCache, mesh_key
 from exactgrasp.geometry.manifold import placed, to_manifold, union_volume_by_overlaps
 
-__all__ = ["LINK_SOLIDS", "LinkSolid", "link_key", "posed_link_solids", "union_volume_of_links"]
+__all__ = ["LINK_SOLIDS", "LinkSolid", "posed_link_solids", "union_volume_of_links"]
 
 #: Link solids of every hand this process has seen, by content (a Barrett hand has 9 links).
 LINK_SOLIDS = LRUCache(256)
@@ -44,14 +43,6 @@ class LinkSolid:
     def __init__(self, vertices: np.ndarray, faces: np.ndarray, name: str):
         self.solid = to_manifold(vertices, faces, f"hand link {name}")
         self.volume = float(self.solid.volume())
-
-
-def link_key(vertices: np.ndarray, faces: np.ndarray) -> str:
-    """SHA-256 (hex) of a link's vertex (float64) and face (int64) arrays: its content."""
-    digest = hashlib.sha256()
-    digest.update(np.ascontiguousarray(vertices, dtype=np.float64).tobytes())
-    digest.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
-    return digest.hexdigest()
 
 
 def _links_and_poses(hand: Any) -> list[tuple[str, np.ndarray, np.ndarray, np.ndarray]]:
@@ -84,7 +75,7 @@ def posed_link_solids(hand: Any) -> list[tuple[Any, float]]:
     """
     out = []
     for name, V, F, pose in _links_and_poses(hand):
-        link = LINK_SOLIDS.get(link_key(V, F), lambda V=V, F=F, name=name: LinkSolid(V, F, name))
+        link = LINK_SOLIDS.get(mesh_key(V, F), lambda V=V, F=F, name=name: LinkSolid(V, F, name))
         out.append((placed(link.solid, pose), link.volume))
     return out
 
