@@ -142,21 +142,24 @@ def test_the_bvh_is_built_only_with_a_broad_phase_and_enough_open_poses():
     hand = [_fine_sphere([0.0, 0.0, 0.0])]  # 5,120 triangles: the BVH is not free
     obj = [box_arrays([-0.1, -0.1, -0.1], [0.1, 0.1, 0.1])]
     inside, far = translations([0, 0, 0]), translations([5.0, 0, 0], [0, 6.0, 0])
-    many_far = translations(*[[5.0 + 0.01 * k, 0, 0] for k in range(40)])
+    # In the corner of the hand's bounding box, off its sphere: neither apart by the bounds
+    # nor crossing, so only the BVHs can cull them.
+    corner = translations(*[[0.48 + 0.0002 * k, 0.48, 0] for k in range(40)])
     for bp in (None, "coal"):
         ex = ExactIntersector(hand, obj, broadphase=bp)
         assert ex.cull is None  # nothing is built before a call
         result = ex.intersect(np.concatenate([inside, far]))
-        assert ex.cull is None and result.stats["poses_culled"] == 0
+        # The far poses need no BVH: the bounds tell them apart.
+        assert ex.cull is None and result.stats["poses_culled"] == (0 if bp is None else 2)
     triangles = len(ex.hand_mesh.faces) + len(ex.object_mesh.faces)
-    assert len(many_far) * defaults.EXACT_CULL_TRIANGLES_PER_POSE >= triangles
-    result = ex.intersect(many_far)
-    assert ex.cull is not None and result.stats["poses_culled"] == len(many_far)
+    assert len(corner) * defaults.EXACT_CULL_TRIANGLES_PER_POSE >= triangles
+    result = ex.intersect(corner)
+    assert ex.cull is not None and result.stats["poses_culled"] == len(corner)
     assert (result.volumes == 0).all()
     # Once built it serves every later call, and culling never changes a bit of a result.
-    assert ex.intersect(far).stats["poses_culled"] == 2
+    assert ex.intersect(corner[:3]).stats["poses_culled"] == 3
     plain = ExactIntersector(hand, obj, broadphase=None)
-    P = np.concatenate([inside, far, many_far])
+    P = np.concatenate([inside, far, corner])
     np.testing.assert_array_equal(ex.volumes(P), plain.volumes(P))
     assert plain.cull is None
 

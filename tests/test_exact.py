@@ -655,3 +655,45 @@ def test_triangle_box_test_against_linear_programme():
         assert got == want
         hits += want
     assert 50 < hits < 250
+
+
+def test_bounds_apart_is_the_sphere_to_box_distance_against_radius_and_gap():
+    from exactgrasp.backends.exact.culling import bounding_sphere, bounds_apart
+
+    centre, radius = bounding_sphere(box([1.0, 1.0, 1.0], [1.2, 1.2, 1.2])[0])
+    np.testing.assert_allclose(centre, [1.1, 1.1, 1.1])
+    assert radius == pytest.approx(0.1 * np.sqrt(3), rel=1e-15)
+    hand = (np.zeros(3), np.ones(3))
+    gap = 1e-7
+    # Rotated a quarter turn about z, then moved: the sphere's centre goes to (-1.1, 1.1, 1.1)
+    # + t; t puts it beyond the box's face x = 1, or its edge (x, y) = (1, 1), by s.
+    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    poses, expected = [], []
+    for s, apart in ((radius + 2 * gap, True), (radius + 0.5 * gap, False), (0.5, True)):
+        for target, direction in (([1.0, 0.5, 0.5], [1, 0, 0]), ([1.0, 1.0, 0.5], [1, 1, 0])):
+            pose = np.eye(4)
+            pose[:3, :3] = turn
+            unit = np.array(direction, float) / np.linalg.norm(direction)
+            pose[:3, 3] = np.array(target) + s * unit - turn @ centre
+            poses.append(pose)
+            expected.append(apart)
+    inside = np.eye(4)
+    inside[:3, 3] = -centre + 0.5
+    poses.append(inside)
+    expected.append(False)
+    assert bounds_apart(np.array(poses), hand, (centre, radius), gap).tolist() == expected
+
+
+@pytest.mark.parametrize("engine", ["coal", "fcl"])
+def test_far_means_farther_than_the_gap(engine):
+    """`MeshPair.far`: true at twice the gap, false at half of it, false when crossing."""
+    from exactgrasp.geometry.bvh import MeshPair
+
+    gap = 1e-3
+    pair = MeshPair(engine, *box([0, 0, 0], [1, 1, 1]), *box([0, 0, 0], [1, 1, 1]), gap=gap)
+    got = []
+    for shift in (1 + 2 * gap, 1 + 0.5 * gap, 0.5):
+        pose = np.eye(4)
+        pose[0, 3] = shift
+        got.append(pair.far(pose))
+    assert got == [True, False, False]

@@ -179,12 +179,12 @@ class MeshPair:
         """
         lib = self._lib
         if self.engine == "coal":
-            tf, identity = _coal_transform(lib, pose), lib.Transform3s()
+            # One collision test with the gap as its security margin ("in collision" when
+            # nearer than the gap): no distance query, which costs several times more.
             req, res = lib.CollisionRequest(), lib.CollisionResult()
-            if lib.collide(self._a, identity, self._b, tf, req, res) > 0:
-                return False
-            dreq, dres = lib.DistanceRequest(), lib.DistanceResult()
-            return lib.distance(self._a, identity, self._b, tf, dreq, dres) > self.gap
+            req.security_margin = self.gap
+            tf = _coal_transform(lib, pose)
+            return lib.collide(self._a, lib.Transform3s(), self._b, tf, req, res) == 0
         with self._lock:  # fcl collision objects carry their transform: not thread-safe
             self._b.setTransform(_fcl_transform(lib, pose))
             if lib.collide(self._a, self._b, lib.CollisionRequest(), lib.CollisionResult()) > 0:

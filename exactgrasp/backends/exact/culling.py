@@ -29,6 +29,71 @@ def shell_labels(V: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, int]:
     return labels.astype(np.int64), int(count)
 
 
+def bounding_sphere(V: np.ndarray) -> tuple[np.ndarray, float]:
+    """A sphere holding every vertex of V (n, 3): the centre of their bounding box (3,) and
+    the largest distance to it."""
+    centre = 0.5 * (V.min(axis=0) + V.max(axis=0))
+    return centre, float(np.sqrt(((V - centre) ** 2).sum(axis=1).max()))
+
+
+def bounds_apart(
+    poses: np.ndarray,
+    box: tuple[np.ndarray, np.ndarray],
+    sphere: tuple[np.ndarray, float],
+    gap: float,
+) -> np.ndarray:
+    """Which poses move a sphere farther than ``gap`` from a box: the solids they hold are
+    then apart, and their intersection's volume exactly 0.
+
+    Parameters
+    ----------
+    poses : numpy.ndarray, shape (k, 4, 4)
+        Rigid motions of the sphere's mesh, in the box's frame.
+    box : (numpy.ndarray (3,), numpy.ndarray (3,))
+        Lower and upper corners of the fixed mesh's bounding box.
+    sphere : (numpy.ndarray (3,), float)
+        `bounding_sphere` of the moving mesh, in its own frame.
+    gap : float
+        Covers the rounding of the moved centre and of the distance (`tolerances.CULL_GAP`
+        times the coordinates' scale).
+
+    Returns
+    -------
+    numpy.ndarray, shape (k,), bool
+    """
+    lower, upper = box
+    centre, radius = sphere
+    moved = poses[:, :3, :3] @ centre + poses[:, :3, 3]
+    outside = np.maximum(np.maximum(lower - moved, moved - upper), 0.0)
+    return np.sqrt((outside**2).sum(axis=1)) > radius + gap
+
+
+def shell_samples(shells: tuple[np.ndarray, int], per_shell: int = 8) -> np.ndarray:
+    """Indices of up to ``per_shell`` vertices of each shell, spread over its vertices, shell
+    by shell: where two surfaces are apart, each vertex of a shell tells where the whole
+    shell lies, so `culled_poses` moves and looks up these instead of every vertex.
+
+    Parameters
+    ----------
+    shells : (numpy.ndarray (n,) int64, int)
+        Shell of each vertex and the number of shells (`shell_labels`).
+    per_shell : int
+
+    Returns
+    -------
+    numpy.ndarray, shape (k,), int64
+    """
+    label, _ = shells
+    order = np.argsort(label, kind="stable")
+    starts = np.flatnonzero(np.r_[True, np.diff(label[order]) != 0])
+    ends = np.r_[starts[1:], len(order)]
+    picks = [
+        order[np.linspace(a, b - 1, min(per_shell, b - a)).astype(np.int64)]
+        for a, b in zip(starts, ends, strict=True)
+    ]
+    return np.concatenate(picks)
+
+
 def shells_outside(
     X: np.ndarray, shells: tuple[np.ndarray, int], grid: CellGrid, V: np.ndarray, F: np.ndarray
 ) -> bool:
@@ -37,9 +102,10 @@ def shells_outside(
     Parameters
     ----------
     X : numpy.ndarray, shape (n, 3)
-        The mesh's vertices in the other mesh's frame.
+        Vertices of the mesh in the other mesh's frame: all of them, or at least one of each
+        shell (`shell_samples`).
     shells : (numpy.ndarray (n,) int64, int)
-        Shell of each vertex and the number of shells (`shell_labels`).
+        Shell of each of those vertices and the number of shells (`shell_labels`).
     grid : tables.CellGrid
         The other mesh's cell grid.
     V, F : numpy.ndarray
@@ -108,6 +174,10 @@ def culled_poses(
     out = np.zeros(len(poses), bool)
     AV, AF = hand_mesh.vertices, hand_mesh.faces
     BV, BF = object_mesh.vertices, object_mesh.faces
+    # Once the surfaces are known apart, a few vertices of each shell decide it.
+    hand_pick, object_pick = shell_samples(shells[0]), shell_samples(shells[1])
+    hand_shells = (shells[0][0][hand_pick], shells[0][1])
+    object_shells = (shells[1][0][object_pick], shells[1][1])
     # The BVH query costs more than the kernel where the surfaces plainly cross; ask it only
     # about the other poses.
     if crossing is None:
@@ -119,9 +189,9 @@ def culled_poses(
         if not cull.far(p):
             continue
         R, t = p[:3, :3], p[:3, 3]
-        moved_object = BV @ R.T + t
-        hand_in_object = (AV - t) @ R
-        out[i] = shells_outside(moved_object, shells[1], hand_grid, AV, AF) and shells_outside(
-            hand_in_object, shells[0], object_grid, BV, BF
+        moved_object = BV[object_pick] @ R.T + t
+        hand_in_object = (AV[hand_pick] - t) @ R
+        out[i] = shells_outside(moved_object, object_shells, hand_grid, AV, AF) and shells_outside(
+            hand_in_object, hand_shells, object_grid, BV, BF
         )
     return out

@@ -35,6 +35,8 @@ import numpy as np
 from exactgrasp.backends import defaults
 from exactgrasp.backends.base import repeated_poses, resolve_jobs
 from exactgrasp.backends.exact.culling import (
+    bounding_sphere,
+    bounds_apart,
     crossing_poses,
     culled_poses,
     shell_labels,
@@ -182,6 +184,11 @@ class ExactIntersector:
         Faces with ``|N|² <= tiny`` get ``D = 0``.
     gap : float
         Surfaces farther apart than this are certainly disjoint (whole-pose culling).
+    hand_box : (numpy.ndarray (3,), numpy.ndarray (3,))
+        Corners of the hand mesh's bounding box, local coordinates.
+    object_sphere : (numpy.ndarray (3,), float)
+        A sphere around the object mesh (`culling.bounding_sphere`): with the box, what the
+        broad phase's first test (`culling.bounds_apart`) reads.
     cull : geometry.bvh.MeshPair or None
         The broad phase's BVHs: None until a `volumes` call has enough poses the kernel's own
         test leaves open (`culling.worth_building`), and always None without a broad phase.
@@ -244,6 +251,10 @@ class ExactIntersector:
         # Surfaces farther apart than this are certainly disjoint whatever the BVH's rounding.
         self.gap = CULL_GAP * scale
         self.feature = f"the exact backend's {broadphase} broad phase"
+        # Poses that move the object's bounding sphere away from the hand's bounding box are
+        # culled without the kernel or a BVH (`culling.bounds_apart`).
+        self.hand_box = (self.hand_mesh.vertices.min(axis=0), self.hand_mesh.vertices.max(axis=0))
+        self.object_sphere = bounding_sphere(self.object_mesh.vertices)
         # Built on first need (`broad_phase`): it costs more than it saves on a few poses.
         self.cull: MeshPair | None = None
         self._cull_lock = threading.Lock()
@@ -260,22 +271,34 @@ class ExactIntersector:
         }
         self.areas = float(self.hand_solid.surface_area() + self.object_solid.surface_area())
 
-    def broad_phase(self, poses: np.ndarray) -> np.ndarray | None:
-        """`culling.crossing_poses` of poses (k, 4, 4; local coordinates) with the BVHs built,
-        or None: no broad phase, or too few open poses to build it (`culling.worth_building`)
-        and not built before."""
+    def broad_phase(self, poses: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """What the broad phase knows of poses (k, 4, 4; local coordinates) before the kernel.
+
+        Returns
+        -------
+        apart : numpy.ndarray, shape (k,), bool, or None
+            Poses that move the object's bounding sphere away from the hand's bounding box
+            (`culling.bounds_apart`): volume exactly 0, culled. None without a broad phase.
+        crossing : numpy.ndarray, shape (k,), bool, or None
+            `culling.crossing_poses` of the other poses (True where ``apart``: decided), with
+            the BVHs built; None when they are not built (too few open poses for them,
+            `culling.worth_building`, and not built before) or without a broad phase.
+        """
         if self.broadphase is None or not len(poses):
-            return None
+            return None, None
+        apart = bounds_apart(poses, self.hand_box, self.object_sphere, self.gap)
+        near = np.flatnonzero(~apart)
         triangles = len(self.hand_mesh.faces) + len(self.object_mesh.faces)
-        if self.cull is None and not worth_building(len(poses), triangles):
-            return None  # too few even if every pose were open: skip the test too
-        crossing = crossing_poses(
-            poses, self.hand_mesh, self.hand_grid, self.object_mesh, self.object_grid,
+        if self.cull is None and not worth_building(len(near), triangles):
+            return apart, None  # too few even if every pose were open: skip the test too
+        crossing = np.ones(len(poses), bool)
+        crossing[near] = crossing_poses(
+            poses[near], self.hand_mesh, self.hand_grid, self.object_mesh, self.object_grid,
             self.shells,
         )  # fmt: skip
         if self.cull is None:
             if not worth_building(int(np.count_nonzero(~crossing)), triangles):
-                return None
+                return apart, None
             with self._cull_lock:
                 if self.cull is None:
                     self.cull = MeshPair(
@@ -283,14 +306,18 @@ class ExactIntersector:
                         self.object_mesh.vertices, self.object_mesh.faces, self.gap,
                         self.feature,
                     )  # fmt: skip
-        return crossing
+        return apart, crossing
 
     def _chunk(
-        self, poses: np.ndarray, crossing: np.ndarray | None = None, with_moments: bool = False
+        self,
+        poses: np.ndarray,
+        apart: np.ndarray | None = None,
+        crossing: np.ndarray | None = None,
+        with_moments: bool = False,
     ):
         """Volumes, bounds, codes, statistics and link moments (k, L, 6; L = 0 without
-        ``with_moments``) of poses (k, 4, 4) in local coordinates; ``crossing`` (k,) from
-        `broad_phase` culls, None does not."""
+        ``with_moments``) of poses (k, 4, 4) in local coordinates; ``apart`` and ``crossing``
+        (k,) from `broad_phase` cull, None does not."""
         n = len(poses)
         links = len(self.link_ids) if with_moments else 0
         moments = np.zeros((n, links, 6))
@@ -299,6 +326,9 @@ class ExactIntersector:
         codes = np.zeros(n, np.int64)
         stats = np.zeros((n, N_STATS), np.int64)
         todo = np.ones(n, bool)
+        if apart is not None:
+            codes[apart] = CULLED
+            todo[apart] = False
         if crossing is not None and self.cull is not None:
             culled = culled_poses(
                 poses, self.cull, self.hand_mesh, self.hand_grid, self.object_mesh,
@@ -412,7 +442,7 @@ class ExactIntersector:
         uniq, back = np.unique(rep, return_inverse=True)
         flat = np.ascontiguousarray(every[uniq])
         n = len(flat)
-        crossing = self.broad_phase(flat)
+        apart, crossing = self.broad_phase(flat)
         jobs = max(1, min(resolve_jobs(self.n_jobs), n))
         # One piece without threads or progress; else pieces interleaved over the poses, so
         # that each mixes cheap and costly ones.
@@ -428,7 +458,12 @@ class ExactIntersector:
         moments = np.empty((n, len(self.link_ids) if with_moments else 0, 6))
 
         def run(ix: np.ndarray):
-            return self._chunk(flat[ix], None if crossing is None else crossing[ix], with_moments)
+            return self._chunk(
+                flat[ix],
+                None if apart is None else apart[ix],
+                None if crossing is None else crossing[ix],
+                with_moments,
+            )
 
         def store(ix: np.ndarray, result: tuple) -> None:
             out[ix], bounds[ix], codes[ix], stats[ix], moments[ix] = result
