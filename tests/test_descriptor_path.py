@@ -144,7 +144,7 @@ def test_the_bvh_is_built_only_with_a_broad_phase_and_enough_open_poses():
     inside, far = translations([0, 0, 0]), translations([5.0, 0, 0], [0, 6.0, 0])
     # In the corner of the hand's bounding box, off its sphere: neither apart by the bounds
     # nor crossing, so only the BVHs can cull them.
-    corner = translations(*[[0.48 + 0.0002 * k, 0.48, 0] for k in range(40)])
+    corner = translations(*[[0.48 + 0.0002 * k, 0.48, 0] for k in range(170)])
     for bp in (None, "coal"):
         ex = ExactIntersector(hand, obj, broadphase=bp)
         assert ex.cull is None  # nothing is built before a call

@@ -34,10 +34,11 @@ EXACT_BROADPHASE = "coal"
 #: batch worker sets (`exactgrasp.backends.base.thread_limit`).
 EXACT_N_JOBS = None
 #: The exact backend builds its broad phase's BVHs (once) only for a call with at least (the
-#: triangles of both meshes) / this many poses the kernel's own test leaves open (not known to
-#: cross): culling one spares at most the kernel's time on it, about what building a BVH over
-#: this many triangles takes (see docs/performance.md).
-EXACT_CULL_TRIANGLES_PER_POSE = 256
+#: triangles of both meshes) / this many poses that neither its bounds nor the kernel's own
+#: test decide: culling one spares the kernel's time on it less the culling's own, and on the
+#: study records' Barrett hand 11-96 triangles' worth of building for each such pose (a
+#: build repaid after 907-7,341 of them; `benchmarks/exact_culling.py`, docs/performance.md).
+EXACT_CULL_TRIANGLES_PER_POSE = 32
 #: Edge crossings recorded per pose before the exact kernel falls back to a boolean.
 EXACT_CAPACITY = 400_000
 #: Grid cells of the exact backend along a mesh's largest extent (measured best on the Barrett

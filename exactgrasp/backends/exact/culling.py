@@ -96,36 +96,43 @@ def shell_samples(shells: tuple[np.ndarray, int], per_shell: int = 8) -> np.ndar
 
 def shells_outside(
     X: np.ndarray, shells: tuple[np.ndarray, int], grid: CellGrid, V: np.ndarray, F: np.ndarray
-) -> bool:
-    """Whether every shell of a mesh lies outside another closed mesh, their surfaces apart.
+) -> np.ndarray:
+    """Whether every shell of a mesh lies outside another closed mesh, their surfaces apart,
+    at each of several poses.
 
     Parameters
     ----------
-    X : numpy.ndarray, shape (n, 3)
-        Vertices of the mesh in the other mesh's frame: all of them, or at least one of each
-        shell (`shell_samples`).
+    X : numpy.ndarray, shape (k, n, 3)
+        Vertices of the mesh in the other mesh's frame, at each of k poses: all of them, or at
+        least one of each shell (`shell_samples`).
     shells : (numpy.ndarray (n,) int64, int)
         Shell of each of those vertices and the number of shells (`shell_labels`).
     grid : tables.CellGrid
         The other mesh's cell grid.
     V, F : numpy.ndarray
         The other mesh, for a winding number where no vertex of a shell has a known status.
+
+    Returns
+    -------
+    numpy.ndarray, shape (k,), bool
     """
     lo, h, n, status = grid.corner, grid.cell, grid.shape, grid.status
     ijk = np.floor((X - lo) * (1.0 / h)).astype(np.int64)
-    off = np.any((ijk < 0) | (ijk >= n), axis=1)
-    i, j, k = np.clip(ijk, 0, n - 1).T
-    st = np.where(off, 0, status[(i * n[1] + j) * n[2] + k])
+    off = np.any((ijk < 0) | (ijk >= n), axis=2)
+    ijk = np.clip(ijk, 0, n - 1)
+    st = np.where(off, 0, status[(ijk[..., 0] * n[1] + ijk[..., 1]) * n[2] + ijk[..., 2]])
     label, count = shells
-    if np.any(st == 1):
-        return False
-    known = np.zeros(count, bool)
-    known[label[st == 0]] = True
-    for shell in np.flatnonzero(~known):
-        x = np.ascontiguousarray(X[np.argmax(label == shell)])
-        if round(winding_number(x, V, F)) & 1:
-            return False
-    return True
+    out = ~np.any(st == 1, axis=1)
+    known = np.zeros((len(X), count), bool)
+    pose, vertex = np.nonzero(st == 0)
+    known[pose, label[vertex]] = True
+    first = np.argmax(label[None, :] == np.arange(count)[:, None], axis=1)
+    for k in np.flatnonzero(out & ~known.all(axis=1)):
+        for shell in np.flatnonzero(~known[k]):
+            if round(winding_number(np.ascontiguousarray(X[k, first[shell]]), V, F)) & 1:
+                out[k] = False
+                break
+    return out
 
 
 def crossing_poses(
@@ -184,14 +191,13 @@ def culled_poses(
         crossing = crossing_poses(poses, hand_mesh, hand_grid, object_mesh, object_grid, shells)
     # Only poses whose volume is exactly 0 are culled: a shell inside the other mesh is left to
     # the kernel, so culling cannot change a single bit of any result.
-    for i in np.flatnonzero(~crossing):
-        p = poses[i]
-        if not cull.far(p):
-            continue
-        R, t = p[:3, :3], p[:3, 3]
-        moved_object = BV[object_pick] @ R.T + t
-        hand_in_object = (AV[hand_pick] - t) @ R
-        out[i] = shells_outside(moved_object, object_shells, hand_grid, AV, AF) and shells_outside(
-            hand_in_object, hand_shells, object_grid, BV, BF
+    candidates = np.flatnonzero(~crossing)
+    far = candidates[[cull.far(poses[i]) for i in candidates]]
+    if len(far):
+        R, t = poses[far, :3, :3], poses[far, :3, 3]
+        moved_object = np.einsum("kij,mj->kmi", R, BV[object_pick]) + t[:, None, :]
+        hand_in_object = np.einsum("kji,kmj->kmi", R, AV[hand_pick][None] - t[:, None, :])
+        out[far] = shells_outside(moved_object, object_shells, hand_grid, AV, AF) & (
+            shells_outside(hand_in_object, hand_shells, object_grid, BV, BF)
         )
     return out
