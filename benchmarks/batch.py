@@ -82,6 +82,19 @@ def study_manifest(data: Path, folder: Path, n: int) -> Path:
     return path
 
 
+def study_rows(args: argparse.Namespace, every: int):
+    """``(manifest, rows)``: every ``every``-th of the 24 rows of `study_manifest` (in a new
+    temporary folder), for a benchmark that times rows one by one; None, after saying so,
+    when the shared data is absent. The records' mesh warnings, which other benchmarks print,
+    are turned off."""
+    data = data_or_skip(args, f"{RECORDS}/README.md")
+    if data is None:
+        return None
+    warnings.simplefilter("ignore")
+    manifest = study_manifest(data, Path(tempfile.mkdtemp(prefix="exactgrasp-bench-")), 24)
+    return manifest, read_manifest(manifest).rows[::every]
+
+
 def _timings(out: Path) -> list[dict]:
     lines = (out / "timings.jsonl").read_text().splitlines()
     return [t for t in map(json.loads, lines) if "part" in t]

@@ -27,20 +27,17 @@ import argparse
 import json
 import statistics
 import sys
-import tempfile
 import time
-import warnings
 from pathlib import Path
 
 import numpy as np
-from batch import RECORDS, study_manifest
+from batch import study_rows
 from scipy.spatial.transform import Rotation
-from shared_data import add_data_options, data_or_skip
+from shared_data import add_data_options
 
 from exactgrasp.backends.base import thread_limit
 from exactgrasp.backends.exact import ExactBackend
 from exactgrasp.backends.exact.culling import culled_poses
-from exactgrasp.batch import read_manifest
 from exactgrasp.batch.worker import warm_up
 from exactgrasp.geometry.bvh import MeshPair
 from exactgrasp.grasp import Grasp
@@ -106,12 +103,10 @@ def main() -> int:
     parser.add_argument("--repeat", type=int, default=3)
     add_data_options(parser)
     args = parser.parse_args()
-    data = data_or_skip(args, f"{RECORDS}/README.md")
-    if data is None:
+    study = study_rows(args, 6)
+    if study is None:
         return 0
-    warnings.simplefilter("ignore")  # the records' mesh warnings, printed by other benchmarks
-    manifest = study_manifest(data, Path(tempfile.mkdtemp(prefix="exactgrasp-bench-")), 24)
-    rows = read_manifest(manifest).rows[::6]
+    manifest, rows = study
     print(
         f"{len(rows)} study records, {POSES} poses a distance, one thread, "
         f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}",

@@ -44,15 +44,13 @@ import argparse
 import itertools
 import json
 import sys
-import tempfile
 import time
-import warnings
 from pathlib import Path
 
 import numpy as np
 import trimesh
-from batch import RECORDS, study_manifest
-from shared_data import add_data_options, data_or_skip
+from batch import study_rows
+from shared_data import add_data_options
 
 from exactgrasp.backends.base import thread_limit
 from exactgrasp.backends.exact.culling import crossing_poses
@@ -60,7 +58,6 @@ from exactgrasp.backends.exact.intersector import ExactIntersector, shifted
 from exactgrasp.backends.voxel import VoxelBackend
 from exactgrasp.backends.voxel.grids import hand_occupancy
 from exactgrasp.backends.voxel.kernel import volumes_of_checked
-from exactgrasp.batch import read_manifest
 from exactgrasp.batch.worker import warm_up
 from exactgrasp.geometry.bvh import MeshPair
 from exactgrasp.geometry.manifold import mesh_arrays, to_manifold
@@ -177,12 +174,11 @@ def main() -> int:
     parser.add_argument("--records", type=int, default=6, help="study records (every 4th of 24)")
     add_data_options(parser)
     args = parser.parse_args()
-    data = data_or_skip(args, f"{RECORDS}/README.md")
-    if data is None:
+    study = study_rows(args, max(1, 24 // args.records))
+    if study is None:
         return 0
-    warnings.simplefilter("ignore")  # the records' mesh warnings, printed by other benchmarks
-    manifest = study_manifest(data, Path(tempfile.mkdtemp(prefix="exactgrasp-bench-")), 24)
-    rows = read_manifest(manifest).rows[:: max(1, 24 // args.records)][: args.records]
+    manifest, rows = study
+    rows = rows[: args.records]
     poses = as_sampler(None).poses().reshape(-1, 4, 4)
     print(
         f"{len(rows)} study records, {len(poses)} poses each, one thread, "
