@@ -697,3 +697,37 @@ def test_far_means_farther_than_the_gap(engine):
         pose[0, 3] = shift
         got.append(pair.far(pose))
     assert got == [True, False, False]
+
+
+def test_culling_decides_a_shell_with_no_known_cell_by_its_winding_number():
+    """A tiny cube beside the hand's face, inside the grid cells the face crosses (no vertex of
+    known status): just outside it is culled (volume exactly 0), just inside it is not (its
+    whole volume), as without a broad phase."""
+    from exactgrasp.backends.exact import culling
+
+    hand = [box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])]
+    side = 0.002
+    obj = [box([0.0, 0.0, 0.0], [side, side, side])]
+    P = np.tile(np.eye(4), (4, 1, 1))
+    P[:, :3, 3] = [[1.003, 0.5, 0.5], [1.005, 0.3, 0.6], [0.995, 0.5, 0.5], [0.993, 0.3, 0.6]]
+    windings = []
+    real = culling.winding_number
+
+    def counted(*args):
+        windings.append(1)
+        return real(*args)
+
+    for engine in ("coal", "fcl"):
+        ex = ExactIntersector(hand, obj, broadphase=engine)
+        try:
+            culling.winding_number = counted
+            result = ex.intersect(P)
+        finally:
+            culling.winding_number = real
+        assert result.pose_sources.tolist() == ["culled", "culled", "kernel", "kernel"]
+        assert result.volumes[:2].tolist() == [0.0, 0.0]
+        assert result.volumes[2:] == pytest.approx(side**3, rel=1e-9)
+        np.testing.assert_array_equal(
+            result.volumes, ExactIntersector(hand, obj, broadphase=None).volumes(P)
+        )
+    assert windings  # the shells were decided by winding numbers, not by grid cells
