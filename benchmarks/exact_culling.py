@@ -89,7 +89,7 @@ def open_pose_costs(grasp: Grasp, poses: np.ndarray) -> dict:
     t0 = time.thread_time()
     culled = culled_poses(
         chosen, ix.cull, ix.hand_mesh, ix.hand_grid, ix.object_mesh, ix.object_grid, ix.shells,
-        np.zeros(len(chosen), bool),
+        ix.samples, np.zeros(len(chosen), bool),
     )  # fmt: skip
     ix._chunk(chosen[~culled])
     culling = time.thread_time() - t0

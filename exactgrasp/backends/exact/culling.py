@@ -167,6 +167,7 @@ def culled_poses(
     object_mesh: MeshTables,
     object_grid: CellGrid,
     shells: tuple[tuple[np.ndarray, int], tuple[np.ndarray, int]],
+    samples: tuple[np.ndarray, np.ndarray],
     crossing: np.ndarray | None = None,
 ) -> np.ndarray:
     """Which poses (k, 4, 4; local coordinates) have volume exactly 0 for certain.
@@ -175,14 +176,14 @@ def culled_poses(
     farther apart than its gap and every shell of each mesh (``shells``: hand's, object's, as
     from `shell_labels`) lies outside the other (`shells_outside`). Surfaces apart, each shell
     lies wholly inside or wholly outside the other mesh, so one vertex of known status decides
-    it; a shell with none gets a winding number. ``crossing`` is `crossing_poses` of the poses
+    it; a shell with none gets a winding number. ``samples`` are the vertices looked up, hand's
+    and object's (`shell_samples` of ``shells``). ``crossing`` is `crossing_poses` of the poses
     when the caller has it. Returns a bool mask (k,).
     """
     out = np.zeros(len(poses), bool)
     AV, AF = hand_mesh.vertices, hand_mesh.faces
     BV, BF = object_mesh.vertices, object_mesh.faces
-    # Once the surfaces are known apart, a few vertices of each shell decide it.
-    hand_pick, object_pick = shell_samples(shells[0]), shell_samples(shells[1])
+    hand_pick, object_pick = samples
     hand_shells = (shells[0][0][hand_pick], shells[0][1])
     object_shells = (shells[1][0][object_pick], shells[1][1])
     # The BVH query costs more than the kernel where the surfaces plainly cross; ask it only

@@ -40,6 +40,7 @@ from exactgrasp.backends.exact.culling import (
     crossing_poses,
     culled_poses,
     shell_labels,
+    shell_samples,
     worth_building,
 )
 from exactgrasp.backends.exact.grids import build_grid, cell_order, morton_order
@@ -178,6 +179,9 @@ class ExactIntersector:
     object_tables : tables.ObjectTables
     shells : tuple
         (labels (n,) int64, count) of the hand's and of the object's connected shells.
+    samples : tuple
+        Indices of up to 8 vertices of each shell, hand's and object's (`culling.shell_samples`):
+        what culling looks up once the surfaces are known apart.
     capacity : int
         Edge crossings recorded per pose and mesh before the pose falls back to a boolean.
     tiny : float
@@ -263,6 +267,8 @@ class ExactIntersector:
             shell_labels(self.hand_mesh.vertices, self.hand_mesh.edges),
             shell_labels(self.object_mesh.vertices, self.object_mesh.edges),
         )
+        # Once the surfaces are known apart, a few vertices of each shell decide it.
+        self.samples = (shell_samples(self.shells[0]), shell_samples(self.shells[1]))
         self.broadphase = broadphase
         self.tuning = {
             "hand_cell": self.hand_grid.cell,
@@ -332,7 +338,7 @@ class ExactIntersector:
         if crossing is not None and self.cull is not None:
             culled = culled_poses(
                 poses, self.cull, self.hand_mesh, self.hand_grid, self.object_mesh,
-                self.object_grid, self.shells, crossing,
+                self.object_grid, self.shells, self.samples, crossing,
             )  # fmt: skip
             codes[culled] = CULLED
             todo[culled] = False
