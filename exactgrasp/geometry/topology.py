@@ -31,6 +31,7 @@ __all__ = [
     "compact",
     "drop_repeated_faces",
     "edge_defects",
+    "format_point",
     "join_meshes",
     "split_nonmanifold",
     "split_shells",
@@ -79,11 +80,12 @@ class EdgeDefects:
             ),
         ):
             if count:
-                parts.append(f"{count} edges {what}, e.g. at {_point(where)}")
+                parts.append(f"{count} edges {what}, e.g. at {format_point(where)}")
         return "; ".join(parts)
 
 
-def _point(x: np.ndarray | None) -> str:
+def format_point(x: np.ndarray | None) -> str:
+    """A point for messages: ``(x, y, z)`` to 6 significant digits (``?`` for None)."""
     return "?" if x is None else f"({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g})"
 
 
@@ -185,10 +187,15 @@ def drop_repeated_faces(faces: np.ndarray) -> tuple[np.ndarray, int, int]:
     return F[keep], repeated, cancelled
 
 
-def _wedge_pairs(V: np.ndarray, F: np.ndarray, halves: np.ndarray, a: int, b: int) -> list:
-    """Pair the half-edges of one non-manifold edge (a < b) so that each pair bounds one solid
-    wedge: going counter-clockwise around a -> b, from a face using b -> a to the next face
-    using a -> b. Returns (forward, backward) half-edge pairs."""
+def _wedge_pairs(
+    V: np.ndarray, F: np.ndarray, halves: np.ndarray, a: int, b: int, solid_wedges: bool
+) -> list[tuple[int, int]]:
+    """Pair the half-edges of one non-manifold edge (a < b) so that each pair bounds one wedge
+    between faces next to each other around the edge: counter-clockwise around a -> b, from a
+    face using b -> a to the next face using a -> b (the pairs hold the solid's wedges), or,
+    with ``solid_wedges`` False, from a face using a -> b to the next using b -> a (the pairs
+    hold the wedges outside). Either way the sheets meet only along the edge and the winding
+    number is unchanged everywhere. Returns (forward, backward) half-edge pairs."""
     tail, _ = _half_edges(F)
     d = V[b] - V[a]
     d = d / np.linalg.norm(d)
@@ -200,26 +207,86 @@ def _wedge_pairs(V: np.ndarray, F: np.ndarray, halves: np.ndarray, a: int, b: in
     u = V[third] - V[a]
     angle = np.arctan2(u @ y, u @ x)
     forward = tail[halves] == a
+    opening = ~forward if solid_wedges else forward
     order = np.argsort(angle, kind="stable")
-    # Opening (b -> a) and closing (a -> b) faces matched like brackets around the circle,
-    # starting just after the lowest running balance so that no closing face comes first.
-    step = np.where(forward[order], -1, 1)
+    # Opening and closing faces matched like brackets around the circle, starting just after
+    # the lowest running balance so that no closing face comes first.
+    step = np.where(opening[order], 1, -1)
     start = (int(np.argmin(np.cumsum(step))) + 1) % len(order)
-    ring = np.roll(order, -start)
     stack: list[int] = []
     pairs = []
-    for h in ring:
-        if not forward[h]:
+    for h in np.roll(order, -start):
+        if opening[h]:
             stack.append(int(halves[h]))
         elif stack:
-            pairs.append((int(halves[h]), stack.pop()))
+            other = stack.pop()
+            pairs.append((int(halves[h]), other) if forward[h] else (other, int(halves[h])))
     return pairs
+
+
+def _fans(F: np.ndarray, ha: np.ndarray, hb: np.ndarray) -> tuple[int, np.ndarray]:
+    """Corners joined into fans across twin half-edges ``ha[i]``, ``hb[i]``: the number of
+    fans and each corner's fan (corner 3f+i is corner i of face f)."""
+    m = len(F)
+    # Corner 3f+i sits at the tail of half-edge 3f+i. Twins run opposite ways, so each twin's
+    # tail corner joins the other's head corner.
+    head_a = (ha // 3) * 3 + (ha % 3 + 1) % 3
+    head_b = (hb // 3) * 3 + (hb % 3 + 1) % 3
+    rows = np.concatenate([ha, hb])
+    cols = np.concatenate([head_b, head_a])
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), (3 * m, 3 * m))
+    return connected_components(graph, directed=False)
+
+
+def _still_crowded(fan: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
+    """Which groups of half-edges (one non-manifold edge each) still hold an edge of more
+    than two faces once every corner is its fan's vertex."""
+    tail = fan
+    head = fan.reshape(-1, 3)[:, [1, 2, 0]].reshape(-1)
+    out = np.zeros(len(groups), bool)
+    for i, halves in enumerate(groups):
+        lo = np.minimum(tail[halves], head[halves])
+        hi = np.maximum(tail[halves], head[halves])
+        _, uses = np.unique(np.stack([lo, hi], 1), axis=0, return_counts=True)
+        out[i] = bool((uses > 2).any())
+    return out
+
+
+def _split_at_midpoints(V: np.ndarray, F: np.ndarray, edges: np.ndarray):
+    """Each face on one of ``edges`` ((k, 2) vertex pairs) cut in two at the edge's midpoint,
+    a new vertex (on the edge to the rounding of its coordinates)."""
+    mid = np.arange(len(V), len(V) + len(edges))
+    W = np.concatenate([V, 0.5 * (V[edges[:, 0]] + V[edges[:, 1]])])
+    lookup = {(int(a), int(b)): int(k) for (a, b), k in zip(edges, mid, strict=True)}
+    kept, added = [], []
+    for f, (p, q, r) in enumerate(F):
+        cut = [
+            (i, lookup.get((min(s, t), max(s, t))))
+            for i, (s, t) in enumerate(((p, q), (q, r), (r, p)))
+        ]
+        cut = [(i, k) for i, k in cut if k is not None]
+        if not cut:
+            kept.append(f)
+            continue
+        i, k = cut[0]
+        c = np.roll(F[f], -i)  # edge c0 -> c1 holds the midpoint k
+        added += [(c[0], k, c[2]), (k, c[1], c[2])]
+    G = np.concatenate([F[kept], np.array(added, np.int64).reshape(-1, 3)])
+    return W, G
 
 
 def split_nonmanifold(
     vertices: np.ndarray, faces: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, int, int]:
     """The same solid as an oriented 2-manifold: non-manifold edges and vertices untangled.
+
+    Around each edge of more than two faces the faces are paired so that each pair bounds one
+    wedge (`_wedge_pairs`), and a vertex whose faces then form several fans becomes one vertex
+    per fan. Pairing the solid's wedges leaves some edges shared where two sheets of one fan
+    pass through the same edge twice (a vertex whose fan cannot be cut in two): those edges
+    pair the wedges outside instead, and an edge that neither pairing frees (an edge of six or
+    more faces tied up that way) is cut at its midpoint first. The result is a 2-manifold by
+    its indices: every edge of exactly two faces, every vertex one fan.
 
     Parameters
     ----------
@@ -230,9 +297,11 @@ def split_nonmanifold(
     Returns
     -------
     vertices : numpy.ndarray, shape (n', 3), float64
-        The input's, with copies of the vertices that were split (unused ones dropped).
-    faces : numpy.ndarray, shape (m, 3), int64
-        The same faces, in order, on the new vertex indices.
+        The input's, with copies of the vertices that were split (unused ones dropped), and
+        the midpoints of edges that were cut.
+    faces : numpy.ndarray, shape (m', 3), int64
+        The same faces, in order, on the new vertex indices (m' = m), unless an edge was cut:
+        then the faces on it are replaced by their halves, at the end.
     nonmanifold_edges : int
         Edges of more than two faces that were paired up.
     split_vertices : int
@@ -240,45 +309,40 @@ def split_nonmanifold(
     """
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
-    m = len(F)
     key, sign = _edge_keys(F, len(V))
     order = np.lexsort((-sign, key))  # per edge: forward halves first
     sorted_key = key[order]
     bounds = np.flatnonzero(np.r_[True, sorted_key[1:] != sorted_key[:-1], True])
     uses = np.diff(bounds)
-    twin_a: list[np.ndarray] = []
-    twin_b: list[np.ndarray] = []
-    simple = uses == 2
-    first = bounds[:-1][simple]
-    twin_a.append(order[first])
-    twin_b.append(order[first + 1])
+    first = bounds[:-1][uses == 2]
     crowded = np.flatnonzero(uses > 2)
-    nm_pairs = []
-    for e in crowded:
-        halves = order[bounds[e] : bounds[e + 1]]
-        k = int(sorted_key[bounds[e]])
-        nm_pairs += _wedge_pairs(V, F, halves, k // len(V), k % len(V))
-    if nm_pairs:
-        pairs = np.array(nm_pairs, np.int64)
-        twin_a.append(pairs[:, 0])
-        twin_b.append(pairs[:, 1])
-    ha = np.concatenate(twin_a)
-    hb = np.concatenate(twin_b)
-    # Corner 3f+i sits at the tail of half-edge 3f+i. Twins run opposite ways, so each twin's
-    # tail corner joins the other's head corner.
-    head_a = (ha // 3) * 3 + (ha % 3 + 1) % 3
-    head_b = (hb // 3) * 3 + (hb % 3 + 1) % 3
-    rows = np.concatenate([ha, hb])
-    cols = np.concatenate([head_b, head_a])
-    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), (3 * m, 3 * m))
-    n_fans, fan = connected_components(graph, directed=False)
+    groups = [order[bounds[e] : bounds[e + 1]] for e in crowded]
+    ends = [divmod(int(sorted_key[bounds[e]]), len(V)) for e in crowded]
+    solid_wedges = np.ones(len(crowded), bool)
+    while True:
+        pairs = [(order[first], order[first + 1])]
+        for halves, (a, b), solid in zip(groups, ends, solid_wedges, strict=True):
+            p = np.array(_wedge_pairs(V, F, halves, a, b, bool(solid)), np.int64).reshape(-1, 2)
+            pairs.append((p[:, 0], p[:, 1]))
+        n_fans, fan = _fans(
+            F, np.concatenate([p[0] for p in pairs]), np.concatenate([p[1] for p in pairs])
+        )
+        stuck = _still_crowded(fan, groups)
+        flip = stuck & solid_wedges
+        if not flip.any():
+            break
+        solid_wedges[flip] = False
+    if stuck.any():
+        W, G = _split_at_midpoints(V, F, np.array(ends, np.int64)[stuck])
+        W, G, _, n_split = split_nonmanifold(W, G)
+        return W, G, len(crowded), n_split
     vertex_of_fan = np.empty(n_fans, np.int64)
     vertex_of_fan[fan] = F.reshape(-1)
-    if n_fans == len(np.unique(F)) and not nm_pairs:
+    if not len(crowded) and n_fans == len(np.unique(F)):
         return V, F, 0, 0
-    new_faces = fan.reshape(m, 3).astype(np.int64)
     counts = np.bincount(vertex_of_fan, minlength=len(V))
     split_vertices = int((counts > 1).sum())
+    new_faces = fan.reshape(-1, 3).astype(np.int64)
     return np.ascontiguousarray(V[vertex_of_fan]), new_faces, len(crowded), split_vertices
 
 

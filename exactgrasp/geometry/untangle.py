@@ -22,6 +22,7 @@ from exactgrasp.geometry.topology import (
     compact,
     drop_repeated_faces,
     edge_defects,
+    format_point,
     join_meshes,
     split_nonmanifold,
     split_shells,
@@ -34,11 +35,6 @@ SELF_FIX = (
     "fix the mesh in a modeller (e.g. MeshLab's 'Select Self Intersecting Faces', then delete "
     "them and close the hole, or Blender's 3D-print toolbox 'Intersect Face')"
 )
-
-
-def format_point(x: np.ndarray) -> str:
-    """A point for messages: ``(x, y, z)`` to 6 significant digits."""
-    return f"({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g})"
 
 
 def crossing_pairs(V: np.ndarray, F: np.ndarray, label: np.ndarray):
@@ -92,7 +88,7 @@ def _untangle_edges(V, F, name, actions):
         W, G, n_edges, n_split = split_nonmanifold(V, G)
         actions.append(
             f"separated the faces of {n_edges} edges shared by more than two faces (e.g. at "
-            f"{format_point(defects.nonmanifold_at)}) into pairs bounding one solid wedge each, "
+            f"{format_point(defects.nonmanifold_at)}) into pairs bounding one wedge each, "
             f"splitting {n_split} vertices"
         )
     return W, G
