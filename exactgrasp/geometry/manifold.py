@@ -13,6 +13,7 @@ import manifold3d
 import numpy as np
 
 from exactgrasp.errors import Fix, MeshError
+from exactgrasp.geometry.topology import edge_defects, format_point
 
 __all__ = [
     "MeshArrays",
@@ -67,6 +68,15 @@ def to_manifold(
         raise MeshError(f"{name}: vertex coordinates contain NaN or infinity; ", *fix_parts)
     if F.min() < 0 or F.max() >= len(V):
         raise MeshError(f"{name}: face indices out of range; ", *fix_parts)
+    defects = edge_defects(V, F)
+    if defects.nonmanifold:
+        # manifold3d would drop faces around such an edge and change the solid.
+        raise MeshError(
+            f"{name}: {defects.nonmanifold} edges are shared by more than two faces (e.g. at "
+            f"{format_point(defects.nonmanifold_at)}), which manifold3d cannot take as they "
+            "are; read the mesh as an exactgrasp.Solid first, which splits them into a "
+            "2-manifold of the same solid."
+        )
     # Copies: manifold3d takes writable arrays only (a Solid's arrays are read-only).
     solid = manifold3d.Manifold(
         manifold3d.Mesh64(
