@@ -157,7 +157,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"{st['parts_culled'] / parts:.1%}",
                 f"{st['parts_inside'] / parts:.1%}",
                 f"{st['parts_clipped'] / parts:.1%}",
-                str(st["poses_boolean"]),
+                str(st["poses_limit"]),
                 f"{plain:.3f}",
                 f"{plain * len(flat) / per_descr:.0f}x",
                 f"{diff.max():.1e}",

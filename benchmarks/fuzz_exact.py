@@ -67,7 +67,7 @@ def record(report, category, case, scene, got, plain, want, ex) -> None:
     report["poses"] += n
     cat = report["per_category"][category]
     cat["poses"] += n
-    report["poses_boolean"] += stats["poses_boolean"]
+    report["poses_limit"] += stats["poses_limit"]
     report["poses_culled"] += stats["poses_culled"]
     exact = is_rational(scene)
     report["poses_rational"] += n if exact else 0
@@ -121,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
         "negative": [],
         "broadphase_differences": [],
         "errors": [],
-        "poses_boolean": 0,
+        "poses_limit": 0,
         "poses_culled": 0,
         "poses_rational": 0,
         "per_category": {c: {"cases": 0, "poses": 0, "mismatching_poses": 0} for c in categories},
@@ -151,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
             record(report, category, case, scene, got, plain, want, ex)
             print(
                 f"[{i + 1}/{args.cases}] {case}: {scene.name}: {len(got)} poses, "
-                f"boolean {ex.stats['poses_boolean']}, culled {ex.stats['poses_culled']}",
+                f"boolean {ex.stats['poses_limit']}, culled {ex.stats['poses_culled']}",
                 flush=True,
             )
             for line in mismatches(scene, got, want, ex.volume_bounds, is_rational(scene)):
@@ -170,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{len(report['broadphase_differences'])}, errors {len(report['errors'])}"
     )
     print(
-        f"boolean fallbacks {report['poses_boolean']}, culled poses {report['poses_culled']}, "
+        f"boolean fallbacks {report['poses_limit']}, culled poses {report['poses_culled']}, "
         f"poses with a rational reference {report['poses_rational']}"
     )
     for c, v in report["per_category"].items():

@@ -31,6 +31,7 @@ from exactgrasp.errors import (
     SamplerError,
     SeparationError,
     UncertainCrossingError,
+    UncertainPoseError,
 )
 from exactgrasp.lazy import lazy_names
 from exactgrasp.version import __version__
@@ -116,6 +117,7 @@ __all__ = [
     "SeparationError",
     "Solid",
     "UncertainCrossingError",
+    "UncertainPoseError",
     "__version__",
     "available_backends",
     "close_fingers",

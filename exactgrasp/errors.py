@@ -227,6 +227,29 @@ class BackendError(ExactGraspError, ValueError):
     """An unknown backend name, or bad backend parameters."""
 
 
+class UncertainPoseError(ExactGraspError, ArithmeticError):
+    """A pose at which the exact backend cannot certify the volume: the surfaces coincide
+    exactly there, and no small translation gives certified volumes on one cubic (see
+    ``docs/exact-backend.md``, "When the kernel cannot certify a pose").
+
+    Attributes
+    ----------
+    pose : numpy.ndarray, shape (4, 4)
+        The object's motion, about the exact backend's local origin.
+    """
+
+    def __init__(self, pose):
+        self.pose = pose
+        t = pose[:3, 3]
+        super().__init__(
+            "the exact volume cannot be certified at the pose translating the object by "
+            f"({t[0]:.6g}, {t[1]:.6g}, {t[2]:.6g}) about the hand's centre: the surfaces "
+            "coincide exactly there and the volume's limit along three small translations "
+            "could not be certified either; move the object by a small amount (1e-9 of its "
+            "size changes the volume by less than that) and compute again."
+        )
+
+
 class MissingDependencyError(ExactGraspError, ImportError):
     """An optional dependency needed for the requested feature is not installed."""
 

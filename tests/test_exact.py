@@ -113,7 +113,7 @@ def test_coincident_faces_fall_back_to_the_boolean():
     P[1, :3, 3] = [0.5, 0, 0]
     result = ex.intersect(P)
     assert np.allclose(result.volumes, [1.0, 0.5], rtol=1e-12, atol=0)
-    assert result.stats["poses_boolean"] == 2
+    assert result.stats["poses_limit"] == 2
 
 
 def test_pose_sources_and_bounds_say_where_each_volume_came_from():
@@ -128,12 +128,12 @@ def test_pose_sources_and_bounds_say_where_each_volume_came_from():
     got, bounds = result.volumes, result.volume_bounds
     ex2 = ExactIntersector(hand, [box([0, 0, 0], [1, 1, 1])], broadphase=None)
     one = ex2.intersect(np.eye(4))  # coincident faces: the boolean
-    assert list(result.pose_sources) == ["kernel", "culled", "boolean"]
+    assert list(result.pose_sources) == ["kernel", "culled", "limit"]
     assert got[1] == 0.0 and bounds[1] == 0.0
     assert 0 < bounds[0] < 1e-12 * got[0]
     assert bounds[2] > bounds[0]
     np.testing.assert_allclose(got[2], got[0] / 8, rtol=1e-9)  # an eighth of the sphere
-    assert one.pose_sources.tolist() == "boolean" and one.volume_bounds > 0
+    assert one.pose_sources.tolist() == "limit" and one.volume_bounds > 0
     # Each call returns its own result; the intersector keeps none of them.
     assert result.pose_sources.shape == (3,) and ex.intersect(P[:1]).pose_sources.shape == (1,)
     assert not {"stats", "pose_sources", "volume_bounds"} & set(vars(ex))
@@ -149,13 +149,13 @@ def test_a_full_crossing_buffer_falls_back_to_the_boolean():
     small = ExactIntersector(hand, obj, broadphase=None, capacity=1)
     result = small.intersect(P[None])
     got = result.volumes
-    assert result.stats["poses_boolean"] == 1 and result.pose_sources.tolist() == ["boolean"]
+    assert result.stats["poses_limit"] == 1 and result.pose_sources.tolist() == ["limit"]
     want = plain_volumes(hand, obj, P[None])
     np.testing.assert_allclose(got, want, rtol=1e-9)
     full = ExactIntersector(hand, obj, broadphase=None)
     result = full.intersect(P[None])
     np.testing.assert_allclose(result.volumes, want, rtol=1e-9)
-    assert result.stats["poses_boolean"] == 0
+    assert result.stats["poses_limit"] == 0
 
 
 def test_edges_passing_near_each_other_match_the_boolean():
@@ -187,7 +187,7 @@ def test_random_convex_polytopes_match_halfspace_intersection():
         P = rigid(rng, 4, tmax=1.5)
         result = ex.intersect(P)
         got = result.volumes
-        assert result.stats["poses_boolean"] == 0  # the certified fast path decided every pose
+        assert result.stats["poses_limit"] == 0  # the certified fast path decided every pose
         for v, p in zip(got, P, strict=True):
             want = halfspace_volume(A[0], moved(B[0], p))
             assert abs(v - want) <= 1e-9 * max(want, 1e-6 * ex.hand_volume)
@@ -455,7 +455,7 @@ def test_real_spray_bottle_grasp_matches_plain_boolean():
     assert 0 < got[0] < 1e-5 * ex.hand_volume
     assert (got[1:] > 1e-3 * ex.hand_volume).all()
     assert agrees(got, ref, ex.hand_volume).all()
-    assert result.stats["poses_boolean"] == 0
+    assert result.stats["poses_limit"] == 0
     assert json.dumps(result.stats)  # serialisable, for the benchmark
 
 
@@ -504,7 +504,7 @@ def test_small_shell_inside_object_surface_cells_matches_plain_boolean():
     got = result.volumes
     ref = plain_volumes([big, tiny], [obj], P)
     assert agrees(got, ref, ex.hand_volume).all()
-    assert result.stats["poses_boolean"] == 0
+    assert result.stats["poses_limit"] == 0
     # Wholly inside the sphere at the first two poses, partly at the third.
     assert got[0] == pytest.approx(1e-6, rel=1e-9)
     assert got[1] == pytest.approx(1e-6, rel=1e-9)
@@ -561,7 +561,7 @@ def test_cells_classified_whole_match_analytic_overlap():
         assert abs(v - want) <= 1e-12 * want
     st = result.stats
     assert st["parts_inside"] > st["parts_clipped"] > 0
-    assert st["parts_culled"] > 0 and st["poses_boolean"] == 0
+    assert st["parts_culled"] > 0 and st["poses_limit"] == 0
 
 
 def test_cotree_leaves_a_spanning_forest_and_parts_are_connected():

@@ -71,7 +71,7 @@ def test_accuracy_does_not_depend_on_position():
         got = result.volumes
         # Measured 5e-14 at 1e3 (the inputs' own rounding there), 2e-16 at the origin.
         assert np.abs(got - want).max() <= 1e-11 * want.max(), offset
-        assert result.stats["poses_boolean"] == 0
+        assert result.stats["poses_limit"] == 0
 
 
 @pytest.mark.parametrize("step", [2.0**-30, 2.0**-44])  # 1.8e-8 and 1.1e-12 off the edge

@@ -10,8 +10,8 @@ The method (see ``docs/exact-backend.md``):
    of either mesh lying inside the other, and pairs of crossing faces. Only faces near the
    other surface are ever tested; everything else is classified by its grid cell.
 3. Every geometric decision is an orientation sign with a certified error bound; a pose where
-   any sign is uncertain is recomputed with a plain manifold3d boolean. Volumes therefore agree
-   with the plain boolean to rounding (about 1e-14 relative, see `reference.agrees`).
+   any sign is uncertain (an exact coincidence of the surfaces) takes the volume's limit along
+   a small translation from certified volumes nearby (`extrapolate`), or is refused.
 4. Where asked (`volume_moments`), the same pass also sums each link's surface moments, which
    give the volume's derivatives (`moments`, `moment_sums`).
 
@@ -43,9 +43,10 @@ from exactgrasp.backends.exact.culling import (
     shell_samples,
     worth_building,
 )
+from exactgrasp.backends.exact.extrapolate import extrapolated
 from exactgrasp.backends.exact.grids import build_grid, cell_order, morton_order
 from exactgrasp.backends.exact.moment_sums import empty_moment_tables, moment_tables
-from exactgrasp.backends.exact.moments import boolean_moments, face_origins, shift_moments
+from exactgrasp.backends.exact.moments import face_origins, shift_moments
 from exactgrasp.backends.exact.options import ExactOptions, check_options
 from exactgrasp.backends.exact.pose import pose_volumes
 from exactgrasp.backends.exact.prepare import hand_tables, object_tables, prepare_mesh
@@ -63,8 +64,6 @@ from exactgrasp.backends.exact.tables import (
     STAT_PAIRS,
 )
 from exactgrasp.backends.exact.tolerances import (
-    BOOLEAN_ROUNDING,
-    BOOLEAN_SLACK,
     CULL_GAP,
     LENGTH_FLOOR,
     TINY_FACE,
@@ -77,7 +76,7 @@ from exactgrasp.geometry.manifold import mesh_arrays, union_solids
 MAX_GRID_CELLS = 200_000_000
 #: What `Intersection.pose_sources` says, indexed by the kernel's result code.
 POSE_SOURCES = np.empty(4, dtype="<U7")
-POSE_SOURCES[[OK, CULLED, DEGENERATE, OVERFLOW]] = ("kernel", "culled", "boolean", "boolean")
+POSE_SOURCES[[OK, CULLED, DEGENERATE, OVERFLOW]] = ("kernel", "culled", "limit", "limit")
 #: Pieces per thread the distinct poses of a call are dealt into (interleaved, taken by
 #: whichever thread is free): they balance threads that run at different speeds and pace
 #: the progress callback, at the price of one kernel call each.
@@ -129,9 +128,9 @@ class Intersection:
     volume_bounds : numpy.ndarray, same shape
         ``|volume - true volume| <= bound``.
     pose_sources : numpy.ndarray, same shape, str
-        ``"kernel"``, ``"culled"`` or ``"boolean"``.
+        ``"kernel"``, ``"culled"`` or ``"limit"``.
     stats : dict
-        Counters of the call (poses, repeats, culled, boolean, cells, pairs, threads, seconds).
+        Counters of the call (poses, repeats, culled, limit, cells, pairs, threads, seconds).
     """
 
     volumes: np.ndarray
@@ -159,7 +158,8 @@ class ExactIntersector:
     **tuning
         ``hand_cell`` / ``object_cell`` (grid cell edge, same units as the meshes; default
         1/48 of the mesh's largest extent, about 0.1 canonical units for the Barrett hand),
-        ``capacity`` (edge crossings per pose before falling back to a boolean, default 400000).
+        ``capacity`` (edge crossings per pose before the pose is run again with a larger
+        buffer, default 400000).
     options : ExactOptions, optional
         The options `options.check_options` already checked (an `ExactBackend`'s), used
         instead of ``broadphase``, ``n_jobs`` and ``tuning``, not checked again.
@@ -171,7 +171,7 @@ class ExactIntersector:
     origin : numpy.ndarray, shape (3,)
         The local origin (centre of the hand's bounds) every table below is relative to.
     hand_solid, object_solid : manifold3d.Manifold
-        The unions, in local coordinates (the boolean fallback).
+        The unions, in local coordinates (their areas, the broad phase, the moments' links).
     hand_mesh, object_mesh : tables.MeshTables
         The unions' meshes; the hand's vertices numbered cell by cell.
     hand_grid, object_grid : tables.CellGrid
@@ -183,7 +183,8 @@ class ExactIntersector:
         Indices of up to 8 vertices of each shell, hand's and object's (`culling.shell_samples`):
         what culling looks up once the surfaces are known apart.
     capacity : int
-        Edge crossings recorded per pose and mesh before the pose falls back to a boolean.
+        Edge crossings recorded per pose and mesh before the pose is run again with a larger
+        buffer (`extrapolate`).
     tiny : float
         Faces with ``|N|² <= tiny`` get ``D = 0``.
     gap : float
@@ -198,7 +199,8 @@ class ExactIntersector:
         test leaves open (`culling.worth_building`), and always None without a broad phase.
         Culling never changes a result.
     areas : float
-        Both unions' surface areas, summed (the boolean's error bound).
+        Both unions' surface areas, summed (in the bound of `extrapolate`, and of the boolean
+        reference in `gradients.boolean_volume_moments`).
     """
 
     def __init__(
@@ -243,6 +245,8 @@ class ExactIntersector:
         self.object_grid = build_grid(BV, BF, float(object_cell))
         self.capacity = int(tuning.get("capacity", defaults.EXACT_CAPACITY))
         scale = max(np.abs(AV).max(), np.abs(BV).max(), LENGTH_FLOOR)
+        #: The scene's size in local coordinates (the extrapolation's step is relative to it).
+        self.size = float(scale)
         self.tiny = TINY_FACE * scale**4
         self.hand_mesh, self.hand_tables = hand_tables(
             prepare_mesh(AV, AF), self.hand_grid, self.tiny
@@ -344,41 +348,34 @@ class ExactIntersector:
             todo[culled] = False
         idx = np.flatnonzero(todo)
         if len(idx):
-            o = np.zeros(len(idx))
-            b = np.zeros(len(idx))
-            c = np.zeros(len(idx), np.int64)
-            st = np.zeros((len(idx), N_STATS), np.int64)
-            mo = np.zeros((len(idx), links, 6))
-            pose_volumes(
-                np.ascontiguousarray(poses[idx]), self.hand_mesh, self.hand_tables,
-                self.hand_grid, self.object_mesh, self.object_tables, self.object_grid,
-                self.tiny, self.capacity, o, b, c, st,
-                self.moment_tables if with_moments else EMPTY_MOMENTS, mo,
-            )  # fmt: skip
-            out[idx], bounds[idx], codes[idx], stats[idx], moments[idx] = o, b, c, st, mo
+            out[idx], bounds[idx], codes[idx], stats[idx], moments[idx] = self._kernel(
+                poses[idx], self.capacity, with_moments
+            )
+
+        def samples(p: np.ndarray, capacity: int):
+            o, b, c, _, mo = self._kernel(p, capacity, with_moments)
+            return o, b, c, mo
+
         for i in np.flatnonzero((codes == DEGENERATE) | (codes == OVERFLOW)):
-            out[i], bounds[i] = self._boolean(poses[i])
-            if with_moments and out[i] > 0:
-                moments[i] = boolean_moments(
-                    self.hand_solid, self.link_ids, self.object_solid, poses[i], self.areas
-                )[1]
+            out[i], bounds[i], moments[i] = extrapolated(
+                samples, poses[i], int(codes[i]), self.size, self.areas, self.capacity, links
+            )
         return out, bounds, codes, stats, moments
 
-    def _boolean(self, pose: np.ndarray) -> tuple[float, float]:
-        """The fallback: manifold3d's volume of hand ∩ moved object, and its error bound.
-
-        manifold3d merges what lies within its tolerance (1e-12 of the coordinates'
-        magnitude), which moves the surfaces by up to that much: the bound is
-        `BOOLEAN_SLACK` times the tolerance times both surfaces' areas. A volume below the
-        rounding of coordinates of that magnitude over those areas (`BOOLEAN_ROUNDING`) is 0:
-        touching faces can leave such crumbs, and slight overlaps a tiny negative volume.
-        """
-        moved = self.object_solid.transform(pose[:3, :])
-        volume = (self.hand_solid ^ moved).volume()
-        tolerance = max(self.hand_solid.get_tolerance(), moved.get_tolerance())
-        bound = BOOLEAN_SLACK * tolerance * self.areas
-        crumbs = BOOLEAN_ROUNDING * tolerance * self.areas
-        return (0.0 if volume <= crumbs else float(volume)), bound
+    def _kernel(self, poses: np.ndarray, capacity: int, with_moments: bool):
+        """The kernel on poses (k, 4, 4) in local coordinates: volumes, bounds, codes,
+        statistics and link moments (k, L, 6; L = 0 without ``with_moments``)."""
+        k = len(poses)
+        o, b = np.zeros(k), np.zeros(k)
+        c = np.zeros(k, np.int64)
+        st = np.zeros((k, N_STATS), np.int64)
+        mo = np.zeros((k, len(self.link_ids) if with_moments else 0, 6))
+        pose_volumes(
+            np.ascontiguousarray(poses), self.hand_mesh, self.hand_tables, self.hand_grid,
+            self.object_mesh, self.object_tables, self.object_grid, self.tiny, capacity,
+            o, b, c, st, self.moment_tables if with_moments else EMPTY_MOMENTS, mo,
+        )  # fmt: skip
+        return o, b, c, st, mo
 
     def volumes(
         self, poses: np.ndarray, progress: Callable[[int], Any] | None = None
@@ -412,19 +409,20 @@ class ExactIntersector:
         Intersection
             ``volumes`` in cubed canonical units; ``stats`` holds ``poses``,
             ``poses_repeated`` (equal to an earlier pose to rounding, see `repeated_poses`:
-            computed once), ``poses_culled`` (skipped by the broad phase), ``poses_boolean``
-            (recomputed with a manifold3d boolean: uncertain sign or overflow), ``parts``
+            computed once), ``poses_culled`` (skipped by the broad phase), ``poses_limit``
+            (an uncertain sign or a full buffer: the limit of `extrapolate`), ``parts``
             (hand grid cells), ``threads`` (threads run),
             ``parts_culled`` / ``parts_inside`` / ``parts_clipped`` (summed over poses:
             cells away from the object's surface and outside / inside it, cells it crosses),
             ``pairs_tested`` / ``pairs_crossing`` (face pairs) and ``seconds``;
             ``pose_sources`` (same shape as the volumes) says where each volume came from:
             ``"kernel"``, ``"culled"`` (exactly 0, see ``docs/exact-backend.md``) or
-            ``"boolean"`` (the manifold3d fallback: an exact coincidence the kernel's signs
-            cannot certify, or a full crossing buffer); ``volume_bounds`` (same shape) bounds
-            each volume's error: ``|volume - true volume| <= bound``, certified for the
-            kernel's poses, 0 for culled ones, manifold3d's tolerance times both areas for
-            the boolean's.
+            ``"limit"`` (an exact coincidence the kernel's signs cannot certify, or a full
+            crossing buffer: the limit along a small translation of certified kernel volumes,
+            `extrapolate`); ``volume_bounds`` (same shape) bounds each volume's error:
+            ``|volume - true volume| <= bound``, certified for the kernel's and the limit's
+            poses, 0 for culled ones. A pose none of these can certify raises
+            `UncertainPoseError`.
         """
         return self._run(poses, progress, False)[0]
 
@@ -491,7 +489,7 @@ class ExactIntersector:
             "poses": len(every),
             "poses_repeated": len(every) - n,
             "poses_culled": int((codes == CULLED).sum()),
-            "poses_boolean": int(((codes == DEGENERATE) | (codes == OVERFLOW)).sum()),
+            "poses_limit": int(((codes == DEGENERATE) | (codes == OVERFLOW)).sum()),
             "parts": len(self.hand_tables.parts) - 1,
             "threads": jobs,
             "parts_culled": int(tot[STAT_CELLS_OUTSIDE]),
