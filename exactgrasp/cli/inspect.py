@@ -17,6 +17,7 @@ from typing import Any
 
 from exactgrasp.cli.common import FlagTerms, add_command, flag, in_flag_terms
 from exactgrasp.errors import ExactGraspError, Fix, ModelError
+from exactgrasp.hands.angles import ANGLES
 from exactgrasp.hands.builtins import BUILTIN_HANDS, BUILTIN_MJCF
 
 __all__ = ["add_parser", "cmd_inspect", "inspect_lines", "package_dirs_from_args"]
@@ -48,8 +49,13 @@ def _package_dir(fix: Fix) -> str:
     return f"{text}:" if fix.form == "entry" else flag(text)(fix)
 
 
-#: `load_model`'s ``package_dirs`` and the flag that sets it here.
-PACKAGE_DIR_TERMS = FlagTerms({"package_dirs": _package_dir})
+def _angle(fix: Fix) -> str:
+    """``angle`` as ``--angle UNIT`` (the bare flag when the fix names no unit)."""
+    return flag("--angle" if fix.value is ... else f"--angle {fix.value}")(fix)
+
+
+#: `load_model`'s options and the flags that set them here.
+PACKAGE_DIR_TERMS = FlagTerms({"package_dirs": _package_dir, "angle": _angle})
 
 
 def package_dirs_from_args(values: list[str] | None) -> Any:
@@ -65,7 +71,11 @@ def package_dirs_from_args(values: list[str] | None) -> Any:
 
 
 def inspect_lines(
-    model: str, geometry: str = "collision", package_dirs: Any = None, root_body: str | None = None
+    model: str,
+    geometry: str = "collision",
+    package_dirs: Any = None,
+    root_body: str | None = None,
+    angle: str | None = None,
 ) -> list[str]:
     """What ``exactgrasp inspect`` prints, as lines.
 
@@ -80,6 +90,8 @@ def inspect_lines(
         See `exactgrasp.hands.loading.load_model`.
     root_body : str, optional
         The hand's root body, for the summary of the loaded hand.
+    angle : {"degree", "radian"}, optional
+        The unit of an MJCF file's angles (see `exactgrasp.hands.loading.load_model`).
 
     Returns
     -------
@@ -99,7 +111,9 @@ def inspect_lines(
     if packaged:  # a built-in hand read from its package's file, cut at its root body
         path = str(model_file(model))
         root_body = root_body or DEXTEROUS_HANDS[model]["root_body"]
-    mj_model = compile_source(path, geometry=geometry, package_dirs=package_dirs, xml=xml)
+    mj_model = compile_source(
+        path, geometry=geometry, package_dirs=package_dirs, xml=xml, angle=angle
+    )
     n_moving = sum(int(t) in (2, 3) for t in mj_model.jnt_type)
     lines = [
         f"{path}: {mj_model.nbody - 1} bodies, {mj_model.njnt} joints ({n_moving} hinge/slide), "
@@ -121,12 +135,15 @@ def inspect_lines(
                     geometry=geometry,
                     package_dirs=package_dirs,
                     xml=xml,
+                    angle=angle,
                 )
     except ExactGraspError as exc:
         return [*lines, f"as a hand: not loadable with these options: {exc}"]
     root = f"root_body={root_body!r}" if root_body else "the whole model"
     lines.append(f"as a hand ({root}): {len(hand.link_names)} links")
     lines.append(f"  user-facing joints: {', '.join(hand.joint_names) or 'none'}")
+    for issue in getattr(hand, "issues", ()):
+        lines.append(f"  warning: {in_flag_terms(issue, PACKAGE_DIR_TERMS)}")
     for dep, (driver, ratio, offset) in hand.couplings.items():
         lines.append(f"  {dep} = {offset:g} + {ratio:g} * {driver}")
     if hand.palm is None:
@@ -158,7 +175,7 @@ def cmd_inspect(args: argparse.Namespace) -> int:
     """Handler of ``exactgrasp inspect``; prints the tree, returns 0."""
     dirs = package_dirs_from_args(args.package_dir)
     try:
-        lines = inspect_lines(args.model, args.geometry, dirs, args.root_body)
+        lines = inspect_lines(args.model, args.geometry, dirs, args.root_body, args.angle)
     except ModelError as exc:
         raise in_flag_terms(exc, PACKAGE_DIR_TERMS) from exc
     for line in lines:
@@ -184,5 +201,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         action="append",
         metavar="[NAME=]DIR",
         help="where package:// and model:// mesh names are found (repeatable)",
+    )
+    parser.add_argument(
+        "--angle",
+        choices=ANGLES,
+        default=None,
+        help="the unit of an MJCF file's angles, replacing its <compiler angle> (default: "
+        "as the file says, else degree)",
     )
     return parser

@@ -215,6 +215,7 @@ class Hand:
         couplings: dict | None = None,
         package_dirs: Any = None,
         repair: bool | None = None,
+        angle: str | None = None,
     ) -> Hand:
         """An articulated hand from an MJCF or URDF model, compiled by mujoco.
 
@@ -239,6 +240,8 @@ class Hand:
             Where ``package://NAME/...`` and ``model://NAME/...`` mesh names are found.
         repair : bool, optional
             Repair open mesh geoms of the hand (with a warning per geom).
+        angle : {"degree", "radian"}, optional
+            The unit of an MJCF file's angles; None: as the file says.
 
         Returns
         -------
@@ -253,6 +256,7 @@ class Hand:
                 "couplings": couplings,
                 "package_dirs": package_dirs,
                 "repair": repair,
+                "angle": angle,
             }
         )
         model = load_model_cached(Path(path), options)

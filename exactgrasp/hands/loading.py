@@ -18,9 +18,10 @@ from pathlib import Path
 from typing import Any
 
 from exactgrasp.cache import LRUCache
-from exactgrasp.errors import ModelError
+from exactgrasp.errors import Fix, ModelError, warn_caller
 from exactgrasp.geometry.files import file_identity
 from exactgrasp.geometry.intake import REPAIR
+from exactgrasp.hands.angles import angle_problem, check_angle, written_angle
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.model import KinematicModel
 from exactgrasp.hands.packages import PackageResolver, package_env, rewrite_spec, rewrite_urdf
@@ -41,6 +42,8 @@ __all__ = [
 #: cereal-box grasps, a batch) compiles its URDF once, not once per grasp.
 MODEL_CACHE_SIZE = 8
 _MODELS = LRUCache(MODEL_CACHE_SIZE)
+#: Where else ``angle`` is set, for warnings (which no front end re-spells).
+ELSEWHERE = ' (in a grasp file: "hand_options": {"angle": ...}; on the command line: --angle)'
 
 
 def urdf_for_mujoco(path: Path, geometry: str, resolver: PackageResolver | None = None) -> str:
@@ -114,6 +117,8 @@ def compile_source(
     geometry: str = "collision",
     package_dirs=None,
     xml: str | None = None,
+    angle: str | None = None,
+    issues: list[ModelError] | None = None,
 ):
     """Compile an MJCF or URDF file (or MJCF text) with its mesh URIs resolved.
 
@@ -127,6 +132,12 @@ def compile_source(
         See `exactgrasp.hands.packages.PackageResolver`.
     xml : str, optional
         MJCF text to compile instead of reading ``path``.
+    angle : {"degree", "radian"}, optional
+        The unit of an MJCF file's angles, replacing its ``<compiler angle>`` (a URDF's are
+        radians). None: as the file says (MuJoCo's default: degree).
+    issues : list, optional
+        Given: a `ModelError` is appended, not raised, for what compiles but is likely wrong
+        (`exactgrasp.hands.angles.angle_problem`).
 
     Returns
     -------
@@ -134,6 +145,7 @@ def compile_source(
     """
     import mujoco  # here, not at the top: importing exactgrasp stays light
 
+    angle = check_angle(angle)
     path = Path(path)
     source = str(path)
     if xml is None and not path.is_file():
@@ -143,6 +155,12 @@ def compile_source(
     if path.suffix.lower() == ".urdf":
         if xml is not None:
             raise ModelError("xml= takes MJCF text; load a URDF from its file")
+        if angle == "degree":
+            raise ModelError(
+                f"{source}: a URDF's angles are radians; ",
+                Fix("angle", "degree"),
+                " applies to MJCF files only: leave angle=None",
+            )
         return compile_model(mujoco, source, xml=urdf_for_mujoco(path, geometry, resolver))
     # MjSpec parses without reading assets, so URI file names can be replaced first.
     spec = _compiled(
@@ -153,7 +171,12 @@ def compile_source(
             else mujoco.MjSpec.from_file(str(path))
         ),
     )
-    if rewrite_spec(spec, resolver):
+    if issues is not None and angle is None:
+        problem = angle_problem(source, spec, written_angle(path, xml))
+        issues.extend([problem] if problem is not None else [])
+    if angle is not None:
+        spec.compiler.degree = angle == "degree"
+    if rewrite_spec(spec, resolver) or angle is not None:
         return _compiled(source, spec.compile)
     return compile_model(mujoco, source, path=path, xml=xml)
 
@@ -168,6 +191,7 @@ def load_model(
     couplings=None,
     package_dirs=None,
     repair: bool = REPAIR,
+    angle: str | None = None,
     xml: str | None = None,
 ) -> KinematicModel:
     """Compile an MJCF (.xml) or URDF (.urdf) hand model with MuJoCo.
@@ -205,6 +229,12 @@ def load_model(
         Repair mesh geoms of the hand that are not closed solids (as ``Solid(repair=True)``:
         merge vertices, fix winding, fill holes), with one warning listing each repaired
         geom with its volume before and after. Only geoms of the hand's subtree are checked.
+    angle : {"degree", "radian"}, optional
+        The unit of an MJCF file's angles (joint ranges and references, ``euler`` and
+        ``axisangle`` orientations), replacing its ``<compiler angle>``. None (default): as
+        the file says, else MuJoCo's default, degree, with a warning when the file says
+        nothing and every hinge range would fit within +-2 pi as radians (see
+        `exactgrasp.hands.angles`). A URDF's angles are radians.
     xml : str, optional
         Model text to compile instead of reading ``path`` (for bundled MJCF models).
 
@@ -219,7 +249,10 @@ def load_model(
     if not isinstance(repair, bool):
         raise ModelError(f"repair must be True or False, got {repair!r}")
     path = Path(path)
-    mj_model = compile_source(path, geometry=geometry, package_dirs=package_dirs, xml=xml)
+    issues: list[ModelError] = []
+    mj_model = compile_source(
+        path, geometry=geometry, package_dirs=package_dirs, xml=xml, angle=angle, issues=issues
+    )
     name = bytes(mj_model.names).split(b"\0", 1)[0].decode() or path.stem
     model = KinematicModel(
         mj_model,
@@ -237,6 +270,9 @@ def load_model(
         except (OSError, ValueError) as exc:
             raise ModelError(f"{path.parent / 'palm_frame.json'}: unreadable ({exc})") from None
     model.palm = resolve_palm(model, palm or None)
+    model.issues = tuple(issues)
+    for issue in issues:
+        warn_caller(f"{issue}{ELSEWHERE}")
     return model
 
 

@@ -74,6 +74,8 @@ class KinematicModel:
             mj_model, in_tree, self._root, names, geometry, tessellation, source, repair=repair
         )
         self.palm: PalmSpec | None = None
+        #: What loaded but is likely wrong, each warned once (`ModelError` s, not raised).
+        self.issues: tuple[ModelError, ...] = ()
 
     def check_joints(
         self, joints: Mapping | None = None, on_limit: str = "error", tol: float | None = None
