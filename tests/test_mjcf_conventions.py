@@ -9,6 +9,7 @@ import math
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 import trimesh
 
@@ -159,3 +160,124 @@ def test_the_warning_is_as_documented_and_inspect_gives_it_as_flags(tmp_path, mo
     assert main(["inspect", "gripper.xml", "--angle", "radian"]) == 0
     out = capsys.readouterr().out
     assert "[0, 0.8] rad (0 .. 45.84 deg)" in out and "warning" not in out
+
+
+# -- fixed tendons as couplings -----------------------------------------------------------------
+
+RADIAN = '<compiler angle="radian"/>'
+ONE_TENDON = """
+  <tendon><fixed name="split"><joint joint="left_joint" coef="1"/>
+    <joint joint="right_joint" coef="-2"/></fixed></tendon>
+  <equality><tendon tendon1="split" polycoef="0.05 0 0 0 0"/></equality>"""
+TWO_TENDONS = """
+  <tendon><fixed name="a"><joint joint="right_joint" coef="2"/></fixed>
+    <fixed name="b"><joint joint="left_joint" coef="1"/></fixed></tendon>
+  <equality><tendon tendon1="a" tendon2="b" polycoef="0.1 0.5 0 0 0"/></equality>"""
+
+
+def _residual(model, joints) -> float:
+    """MuJoCo's own equality residual at the hand's full joint values."""
+    import mujoco
+
+    m = model._m
+    data = mujoco.MjData(m)
+    for name, value in model.all_joint_values(model.check_joints(joints)).items():
+        data.qpos[m.jnt_qposadr[model._joint_ids[name]]] = value
+    mujoco.mj_forward(m, data)
+    return float(
+        np.abs(data.efc_pos[data.efc_type == mujoco.mjtConstraint.mjCNSTR_EQUALITY]).max()
+    )
+
+
+@pytest.mark.parametrize(
+    ("extra", "ratio", "offset"), [(ONE_TENDON, 0.5, -0.025), (TWO_TENDONS, 0.25, 0.05)]
+)
+def test_a_gripper_tied_by_a_fixed_tendon_closes_as_one(tmp_path, extra, ratio, offset):
+    """left - 2 right = 0.05 (one tendon held); 2 right = 0.1 + 0.5 left (two tied)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model = load_model(_write(tmp_path, gripper(RADIAN, extra=extra)), palm=PALM)
+    assert model.joint_names == ("left_joint",)
+    driver, got_ratio, got_offset = model.couplings["right_joint"]
+    assert (driver, got_ratio, got_offset) == (
+        "left_joint",
+        pytest.approx(ratio),
+        pytest.approx(offset),
+    )
+    for left in (0.2, 0.5, 0.8):
+        full = model.all_joint_values({"left_joint": left})
+        assert full["right_joint"] == pytest.approx(offset + ratio * left)
+        assert _residual(model, {"left_joint": left}) < 1e-12
+    # moving the driving joint turns the other finger by the relation (box centres, hand frame)
+    centres = {name: V.mean(axis=0) for name, V, _ in model.link_meshes({"left_joint": 0.6})}
+    right = offset + ratio * 0.6
+    np.testing.assert_allclose(
+        centres["left"], [0.02 + 0.02 * np.sin(0.6), 0, 0.01 + 0.02 * np.cos(0.6)], atol=1e-12
+    )
+    np.testing.assert_allclose(
+        centres["right"],
+        [-0.02 - 0.02 * np.sin(right), 0, 0.01 + 0.02 * np.cos(right)],
+        atol=1e-12,
+    )
+
+
+def test_a_soft_tendon_is_warned_with_the_coupling_that_would_tie_it(tmp_path):
+    soft = """
+  <tendon><fixed name="spring" stiffness="50" springlength="0.1">
+    <joint joint="left_joint" coef="1"/><joint joint="right_joint" coef="-1"/></fixed></tendon>"""
+    path = _write(tmp_path, gripper(RADIAN, extra=soft))
+    with pytest.warns(UserWarning) as caught:
+        model = load_model(path, palm=PALM)
+    (message,) = [str(w.message) for w in caught]
+    assert message == (
+        f"{path}: fixed tendons with stiffness and no <equality><tendon> couple their joints "
+        "only softly, so here the joints move independently: 'spring' ties left_joint, "
+        "right_joint (couplings={'right_joint': ('left_joint', 1, -0.1)} holds its rest "
+        "length); pass couplings={dependent: (driver, ratio, offset)} to tie them"
+    )
+    assert model.joint_names == ("left_joint", "right_joint")
+    # the coupling it names ties them, and quiets it
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tied = load_model(path, palm=PALM, couplings={"right_joint": ("left_joint", 1, -0.1)})
+    assert tied.all_joint_values({"left_joint": 0.5})["right_joint"] == pytest.approx(0.4)
+
+
+def test_a_tendon_equality_over_three_joints_is_left_with_a_warning(tmp_path):
+    text = gripper(RADIAN).replace(
+        '<geom name="palm"',
+        '<joint name="wrist" type="hinge" axis="0 0 1" range="-1 1"/><geom name="palm"',
+    )
+    text = text.replace(
+        '<body name="palm">',
+        '<body name="base"><geom type="sphere" size="0.001"/><body name="palm">',
+    ).replace("</worldbody>", "</body></worldbody>")
+    extra = """
+  <tendon><fixed name="three"><joint joint="left_joint" coef="1"/>
+    <joint joint="right_joint" coef="1"/><joint joint="wrist" coef="1"/></fixed></tendon>
+  <equality><tendon tendon1="three"/></equality>"""
+    path = _write(tmp_path, text.replace("</mujoco>", extra + "\n</mujoco>"))
+    with pytest.warns(UserWarning, match=r"ties 3 joint\(s\) \(left_joint, right_joint, wrist\)"):
+        model = load_model(path, palm=PALM)
+    assert model.couplings == {}
+
+
+@pytest.mark.parametrize(
+    ("extra", "said"),
+    [
+        (TWO_TENDONS.replace("0.1 0.5 0 0 0", "0.1 0.5 0.2 0 0"), "non-linear tendon equality"),
+        (
+            """
+  <tendon><spatial name="cord"><site site="s1"/><site site="s2"/></spatial></tendon>
+  <equality><tendon tendon1="cord"/></equality>""",
+            r"only fixed tendons \(sums of joint values\) become couplings",
+        ),
+    ],
+)
+def test_tendon_equalities_that_are_not_couplings_are_warned(tmp_path, extra, said):
+    text = gripper(RADIAN, extra=extra)
+    text = text.replace('pos="0 0 0.02"/>', 'pos="0 0 0.02"/><site name="s{}"/>', 2)
+    text = text.replace("s{}", "s1", 1).replace("s{}", "s2", 1)
+    with pytest.warns(UserWarning, match=said):
+        model = load_model(_write(tmp_path, text), palm=PALM)
+    assert model.joint_names == ("left_joint", "right_joint") and model.couplings == {}
