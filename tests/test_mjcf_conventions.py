@@ -64,13 +64,13 @@ def test_ranges_read_as_degrees_are_warned_and_angle_radian_reads_radians(tmp_pa
     assert "or angle='degree' to keep degrees" in message
     assert '"hand_options": {"angle": ...}' in message and "--angle" in message
     assert model.joint_limits["left_joint"] == pytest.approx((0.0, math.radians(0.8)))
-    assert [str(issue) for issue in model.issues] == [message.split(" (in a grasp file")[0]]
+    assert [str(caution) for caution in model.cautions] == [message.split(" (in a grasp file")[0]]
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         radians = load_model(path, palm=PALM, angle="radian")
         degrees = load_model(path, palm=PALM, angle="degree")
     assert radians.joint_limits["left_joint"] == pytest.approx((0.0, 0.8))
-    assert radians.issues == ()
+    assert radians.cautions == ()
     assert degrees.joint_limits["left_joint"] == pytest.approx((0.0, math.radians(0.8)))
     # the unit reaches every angle of the file, as MuJoCo's compiler attribute does
     hand = eg.Hand.from_mjcf(path, {"left_joint": 0.5}, palm=PALM, angle="radian")
@@ -91,7 +91,7 @@ def test_no_warning_when_the_file_says_or_a_range_is_wider_than_a_turn(tmp_path,
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         model = load_model(path, palm=PALM)
-    assert model.issues == ()
+    assert model.cautions == ()
     high = float(ranges.split()[1])
     expected = high if "radian" in compiler else math.radians(high)
     assert model.joint_limits["left_joint"][1] == pytest.approx(expected)
@@ -281,3 +281,129 @@ def test_tendon_equalities_that_are_not_couplings_are_warned(tmp_path, extra, sa
     with pytest.warns(UserWarning, match=said):
         model = load_model(_write(tmp_path, text), palm=PALM)
     assert model.joint_names == ("left_joint", "right_joint") and model.couplings == {}
+
+
+# -- all of a model's problems in one report ------------------------------------------------------
+
+#: A tetrahedron with one face missing: MuJoCo compiles it; it bounds no solid.
+OPEN_TETRA = "v 0 0 0\nv 0.01 0 0\nv 0 0.01 0\nv 0 0 0.01\nf 1 3 2\nf 1 2 4\nf 2 3 4\n"
+
+
+def _broken(tmp_path):
+    """The gripper, in degrees without saying so, with an open mesh geom on its palm."""
+    (tmp_path / "open.obj").write_text(OPEN_TETRA)
+    text = gripper().replace(
+        '<geom name="palm" type="box" size="0.03 0.02 0.01"/>',
+        '<geom name="palm" type="box" size="0.03 0.02 0.01"/>'
+        '<geom name="shell" type="mesh" mesh="open" pos="0 0 -0.03"/>',
+    )
+    text = text.replace(
+        "<worldbody>", '<asset><mesh name="open" file="open.obj"/></asset>\n  <worldbody>'
+    )
+    return _write(tmp_path, text)
+
+
+def test_three_problems_come_in_one_error_each_with_its_fix(tmp_path):
+    path = _broken(tmp_path)
+    with pytest.raises(ModelError) as caught:
+        eg.Hand.from_mjcf(path)
+    error = caught.value
+    lines = str(error).splitlines()
+    assert lines[0] == f"{path}: 3 problems, each with its fix:"
+    assert len(lines) == 4 and all(line.startswith("  - ") for line in lines[1:])
+    assert "mesh geom 'shell' of body 'palm' is not a closed surface" in lines[1]
+    assert "pass repair=True" in lines[1]
+    assert "MuJoCo read its hinge ranges in degrees" in lines[2]
+    assert "pass angle='radian'" in lines[2]
+    assert lines[3].startswith("  - gripper has no palm frame; write the palm frame into ")
+    assert 'or pass palm={"origin": [x, y, z], "normal": [x, y, z], "up"' in lines[3]
+    assert [type(p).__name__ for p in error.problems] == ["ModelError", "ModelError", "FrameError"]
+    assert [f.parameter for p in error.problems for f in p.fixes] == [
+        "repair", "angle", "angle", "palm"
+    ]  # fmt: skip
+    # load_model reports a palm frame that names no body, with the rest
+    with pytest.raises(ModelError) as caught:
+        load_model(path, palm={"body": "nope", "normal": "+z", "up": "+y", "depth": 0.05})
+    lines = str(caught.value).splitlines()
+    assert lines[0] == f"{path}: 3 problems, each with its fix:"
+    assert lines[2] == f"  - {path}: palm body 'nope' does not exist"
+    # each fix taken, it loads
+    with pytest.warns(UserWarning, match="repaired 1 mesh geom"):
+        hand = eg.Hand.from_mjcf(path, palm=PALM, repair=True, angle="radian")
+    assert hand.joint_limits["left_joint"] == pytest.approx((0.0, 0.8))
+
+
+def test_inspect_prints_the_same_report_in_its_flags(tmp_path, capsys):
+    from exactgrasp.cli import main
+
+    path = _broken(tmp_path)
+    assert main(["inspect", str(path)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    at = out.index("as a hand: not loadable with these options (3 problem(s), each with its fix):")
+    report = out[at + 1 :]
+    assert len(report) == 3
+    assert "is not a closed surface" in report[0] and "pass --repair" in report[0]
+    assert "pass --angle radian" in report[1]
+    assert 'or pass --palm \'{"origin": [x, y, z]' in report[2]
+    palm = json.dumps(PALM)
+    argv = ["inspect", str(path), "--repair", "--angle", "radian", "--palm", palm]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "palm frame: origin (0, 0, 0.01), normal (0, 0, 1), up (0, 1, 0), depth 0.06 m" in out
+    coupled = '{"right_joint": ["left_joint", 1]}'
+    assert main([*argv, "--couplings", coupled]) == 0
+    out = capsys.readouterr().out
+    assert "user-facing joints: left_joint\n" in out and "right_joint = 0 + 1 * left_joint" in out
+
+
+# -- palm frames without a file -------------------------------------------------------------------
+
+
+def test_a_palm_frame_file_keyed_by_model_file_name(tmp_path):
+    """The documented keyed palm_frame.json, in a folder of two models (and one it lacks)."""
+    page = (ROOT / "docs" / "hand-models.md").read_text()
+    keyed = json.loads(page.split("is keyed):\n\n```json\n")[1].split("```")[0])
+    (tmp_path / "palm_frame.json").write_text(json.dumps(keyed))
+    site = '<site name="pinch" pos="0 0 0.01"/><geom name="palm"'
+    robotiq = gripper(RADIAN).replace('<geom name="palm"', site)
+    model = load_model(_write(tmp_path, robotiq, "robotiq.xml"))
+    assert model.palm.origin == pytest.approx((0, 0, 0.01)) and model.palm.depth == 0.06
+    urdf = tmp_path / "panda_hand.urdf"
+    urdf.write_text(
+        '<robot name="panda_hand"><link name="base"><collision><geometry>'
+        '<box size="0.1 0.1 0.1"/></geometry></collision></link></robot>'
+    )
+    assert load_model(urdf).palm.origin == pytest.approx((0, 0, 0.06))
+    other = _write(tmp_path, gripper(RADIAN), "other.xml")
+    assert load_model(other).palm is None
+    with pytest.raises(eg.FrameError) as caught:
+        eg.Hand.from_mjcf(other)
+    assert str(caught.value) == (
+        'gripper has no palm frame; add "other.xml": {"origin": [x, y, z], "normal": [x, y, z], '
+        f'"up": [x, y, z], "depth": d}} to {tmp_path / "palm_frame.json"} (keyed by model file '
+        "name) in the model's coordinates (metres): the centre of the palm's face, the "
+        "direction out of the palm, the direction along the palm towards the thumb (or a "
+        "chosen side), and the distance from the palm to the outside of the loosely closed "
+        "fingers (see docs/tutorial.md, 'The palm frame'), or pass palm={\"origin\": [x, y, z], "
+        '"normal": [x, y, z], "up": [x, y, z], "depth": d}.'
+    )
+    # palm= needs no file; a grasp file spells it as its key
+    assert eg.Hand.from_mjcf(other, palm=PALM).frame.scale == pytest.approx(2 / 0.06)
+    fix = caught.value.fixes[0]
+    assert fix.parameter == "palm"
+    from exactgrasp.grasp.files import file_terms
+
+    assert file_terms(fix.replace(file_key="hand_options.palm")) == (
+        'set "hand_options": {"palm": {"origin": [x, y, z], "normal": [x, y, z], "up": '
+        '[x, y, z], "depth": d}} in the grasp file'
+    )
+
+
+def test_an_unreadable_palm_frame_file_is_one_of_the_problems(tmp_path):
+    (tmp_path / "palm_frame.json").write_text("{not json")
+    path = _broken(tmp_path)
+    with pytest.raises(ModelError) as caught:
+        eg.Hand.from_mjcf(path, angle="radian")
+    lines = str(caught.value).splitlines()
+    assert lines[0] == f"{path}: 2 problems, each with its fix:"
+    assert lines[2].startswith(f"  - {tmp_path / 'palm_frame.json'}: unreadable (")

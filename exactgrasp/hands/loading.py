@@ -25,7 +25,7 @@ from exactgrasp.hands.angles import angle_problem, check_angle, written_angle
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.model import KinematicModel
 from exactgrasp.hands.packages import PackageResolver, package_env, rewrite_spec, rewrite_urdf
-from exactgrasp.hands.palm import PalmSpec, resolve_palm
+from exactgrasp.hands.palm import PALM_FILE, PalmSpec, palm_from_file, resolve_palm
 
 __all__ = [
     "MODEL_CACHE_SIZE",
@@ -118,7 +118,7 @@ def compile_source(
     package_dirs=None,
     xml: str | None = None,
     angle: str | None = None,
-    issues: list[ModelError] | None = None,
+    cautions: list[ModelError] | None = None,
 ):
     """Compile an MJCF or URDF file (or MJCF text) with its mesh URIs resolved.
 
@@ -135,7 +135,7 @@ def compile_source(
     angle : {"degree", "radian"}, optional
         The unit of an MJCF file's angles, replacing its ``<compiler angle>`` (a URDF's are
         radians). None: as the file says (MuJoCo's default: degree).
-    issues : list, optional
+    cautions : list, optional
         Given: a `ModelError` is appended, not raised, for what compiles but is likely wrong
         (`exactgrasp.hands.angles.angle_problem`).
 
@@ -171,9 +171,9 @@ def compile_source(
             else mujoco.MjSpec.from_file(str(path))
         ),
     )
-    if issues is not None and angle is None:
+    if cautions is not None and angle is None:
         problem = angle_problem(source, spec, written_angle(path, xml))
-        issues.extend([problem] if problem is not None else [])
+        cautions.extend([problem] if problem is not None else [])
     if angle is not None:
         spec.compiler.degree = angle == "degree"
     if rewrite_spec(spec, resolver) or angle is not None:
@@ -242,21 +242,15 @@ def load_model(
     -------
     KinematicModel
     """
-    if geometry not in ("collision", "visual", "all"):
-        raise ModelError(f"geometry must be 'collision', 'visual' or 'all', got {geometry!r}")
-    if isinstance(tessellation, bool) or int(tessellation) != tessellation or tessellation < 4:
-        raise ModelError(f"tessellation must be an integer >= 4, got {tessellation!r}")
-    if not isinstance(repair, bool):
-        raise ModelError(f"repair must be True or False, got {repair!r}")
+    _check_options(geometry, tessellation, repair)
     path = Path(path)
-    issues: list[ModelError] = []
+    cautions: list[ModelError] = []
     mj_model = compile_source(
-        path, geometry=geometry, package_dirs=package_dirs, xml=xml, angle=angle, issues=issues
+        path, geometry=geometry, package_dirs=package_dirs, xml=xml, angle=angle, cautions=cautions
     )
-    name = bytes(mj_model.names).split(b"\0", 1)[0].decode() or path.stem
     model = KinematicModel(
         mj_model,
-        name=name,
+        name=bytes(mj_model.names).split(b"\0", 1)[0].decode() or path.stem,
         source=str(path),
         root_body=root_body,
         geometry=geometry,
@@ -264,16 +258,34 @@ def load_model(
         couplings=couplings,
         repair=repair,
     )
-    if palm is None and xml is None and (path.parent / "palm_frame.json").is_file():
-        try:
-            palm = json.loads((path.parent / "palm_frame.json").read_text())
-        except (OSError, ValueError) as exc:
-            raise ModelError(f"{path.parent / 'palm_frame.json'}: unreadable ({exc})") from None
-    model.palm = resolve_palm(model, palm or None)
-    model.issues = tuple(issues)
-    for issue in issues:
-        warn_caller(f"{issue}{ELSEWHERE}")
+    return _with_palm(model, path, None if xml is not None else palm_from_file, palm, cautions)
+
+
+def _with_palm(model: KinematicModel, path: Path, read, palm, cautions) -> KinematicModel:
+    """``model`` with its palm frame (``palm``, else ``read(path)`` when given), or one
+    `ModelError` reporting every problem found while loading it, ``cautions`` among them."""
+    problems = model.problems
+    try:
+        if palm is None and read is not None:
+            palm = read(path)
+        model.palm = resolve_palm(model, palm or None)
+    except ModelError as exc:  # reported with the geoms' problems
+        problems.append(exc)
+    if problems:
+        raise ModelError.report(str(path), [*problems, *cautions])
+    model.cautions = tuple(cautions)
+    for caution in cautions:
+        warn_caller(f"{caution}{ELSEWHERE}")
     return model
+
+
+def _check_options(geometry, tessellation, repair) -> None:
+    if geometry not in ("collision", "visual", "all"):
+        raise ModelError(f"geometry must be 'collision', 'visual' or 'all', got {geometry!r}")
+    if isinstance(tessellation, bool) or int(tessellation) != tessellation or tessellation < 4:
+        raise ModelError(f"tessellation must be an integer >= 4, got {tessellation!r}")
+    if not isinstance(repair, bool):
+        raise ModelError(f"repair must be True or False, got {repair!r}")
 
 
 def jsonable(options: dict[str, Any]) -> dict[str, Any]:
@@ -315,7 +327,7 @@ def load_model_cached(path: Path, options: dict[str, Any]) -> KinematicModel:
     """
     key = (
         file_identity(path),
-        file_identity(path.parent / "palm_frame.json"),
+        file_identity(path.parent / PALM_FILE),
         json.dumps(jsonable(options), sort_keys=True, default=repr),
         tuple(sorted(package_env().items())),  # where package:// names resolve to
     )
