@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     import argparse
-    from collections.abc import Callable
+    from collections.abc import Callable, Sequence
     from types import FrameType
 
 _PACKAGE_DIR = str(Path(__file__).resolve().parent)
@@ -220,7 +220,39 @@ class JointError(ExactGraspError, ValueError):
 
 
 class ModelError(ExactGraspError, ValueError):
-    """A hand model (MJCF, URDF) cannot be turned into closed link meshes."""
+    """A hand model (MJCF, URDF) cannot be turned into closed link meshes.
+
+    Attributes
+    ----------
+    problems : tuple of ExactGraspError
+        Each problem found, with its own fixes: the lines of a `report`, else this error.
+    """
+
+    @property
+    def problems(self) -> tuple[ExactGraspError, ...]:
+        return self.__dict__.get("listed", (self,))
+
+    @classmethod
+    def report(cls, source: str, problems: Sequence[ExactGraspError]) -> ExactGraspError:
+        """One error for all of a model's ``problems``: one line each, with its fixes.
+
+        ``source`` names the model file; a `ModelError` among ``problems`` brings its own
+        `problems`. Returns the one problem itself, or a `ModelError` with a line per problem
+        whose `problems` holds them; raise it.
+        """
+        listed = tuple(
+            p
+            for problem in problems
+            for p in (problem.problems if isinstance(problem, ModelError) else (problem,))
+        )
+        if len(listed) == 1:
+            return listed[0]
+        parts: list[str | Fix] = [f"{source}: {len(listed)} problems, each with its fix:"]
+        for problem in listed:
+            parts += ["\n  - ", *problem.parts]
+        error = cls(*parts)
+        error.listed = listed
+        return error
 
 
 class BackendError(ExactGraspError, ValueError):

@@ -600,10 +600,13 @@ def test_a_missing_palm_frame_has_one_fix_in_the_error_and_in_inspect(tmp_path, 
     error = str(caught.value)
     prefix = "two_finger has no palm frame; "
     assert error.startswith(prefix + f"write the palm frame into {tmp_path / 'palm_frame.json'}: ")
-    fix = error.removeprefix(prefix).removesuffix(".")
+    fix, python = error.removeprefix(prefix).removesuffix(".").split(", or ")
+    assert python.startswith('pass palm={"origin": [x, y, z], "normal"')
     assert main(["inspect", str(urdf)]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert f"  palm frame: none; {fix}" in lines
+    assert (
+        f"  palm frame: none; {fix}, or pass --palm '{python.removeprefix('pass palm=')}'" in lines
+    )
     assert '{"origin": [x, y, z], "normal": [x, y, z], "up": [x, y, z], "depth": d}' in fix
     assert "docs/tutorial.md" in fix
     # Written as it says, the model loads, with that frame.

@@ -11,15 +11,18 @@ reading XML.
 from __future__ import annotations
 
 import argparse
+import json
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from exactgrasp.cli.common import FlagTerms, add_command, flag, in_flag_terms
+from exactgrasp.cli.common import GRASP_FLAGS, FlagTerms, add_command, flag, in_flag_terms
 from exactgrasp.errors import ExactGraspError, Fix, ModelError
+from exactgrasp.hands.angles import ANGLES
 from exactgrasp.hands.builtins import BUILTIN_HANDS, BUILTIN_MJCF
 
-__all__ = ["add_parser", "cmd_inspect", "inspect_lines", "package_dirs_from_args"]
+__all__ = ["add_parser", "cmd_inspect", "inspect_lines", "json_option", "package_dirs_from_args"]
 
 
 #: The command's line in ``exactgrasp --help``.
@@ -48,8 +51,30 @@ def _package_dir(fix: Fix) -> str:
     return f"{text}:" if fix.form == "entry" else flag(text)(fix)
 
 
-#: `load_model`'s ``package_dirs`` and the flag that sets it here.
-PACKAGE_DIR_TERMS = FlagTerms({"package_dirs": _package_dir})
+def _angle(fix: Fix) -> str:
+    """``angle`` as ``--angle UNIT`` (the bare flag when the fix names no unit)."""
+    return flag("--angle" if fix.value is ... else f"--angle {fix.value}")(fix)
+
+
+def _json_flag(name: str) -> Callable[[Fix], str]:
+    """A JSON-valued option as its flag, with the value when the fix shows one."""
+
+    def spell(fix: Fix) -> str:
+        return flag(name if fix.shown is None else f"{name} '{fix.shown}'")(fix)
+
+    return spell
+
+
+#: `load_model`'s options and the flags that set them here.
+MODEL_TERMS = FlagTerms(
+    {
+        "package_dirs": _package_dir,
+        "angle": _angle,
+        "repair": GRASP_FLAGS["repair"],
+        "palm": _json_flag("--palm"),
+        "couplings": _json_flag("--couplings"),
+    }
+)
 
 
 def package_dirs_from_args(values: list[str] | None) -> Any:
@@ -64,10 +89,8 @@ def package_dirs_from_args(values: list[str] | None) -> Any:
     return {name: folder for name, _, folder in named} if named else plain
 
 
-def inspect_lines(
-    model: str, geometry: str = "collision", package_dirs: Any = None, root_body: str | None = None
-) -> list[str]:
-    """What ``exactgrasp inspect`` prints, as lines.
+def inspect_lines(model: str, **options: Any) -> list[str]:
+    """What ``exactgrasp inspect`` prints, as lines (fixes spelled as its flags).
 
     Parameters
     ----------
@@ -75,31 +98,34 @@ def inspect_lines(
         A URDF or MJCF file, or the name of a built-in hand (see
         `exactgrasp.hands.builtins.BUILTIN_HANDS`; ``adroit`` and ``shadow_hand`` are read
         from their package's file, cut at their root body unless ``root_body`` is given).
-    geometry : {"collision", "visual", "all"}
-    package_dirs : dict or list, optional
-        See `exactgrasp.hands.loading.load_model`.
-    root_body : str, optional
-        The hand's root body, for the summary of the loaded hand.
+    **options
+        `exactgrasp.hands.loading.load_model`'s ``root_body``, ``geometry``,
+        ``package_dirs``, ``angle``, ``palm``, ``repair`` and ``couplings``; a built-in hand
+        without them is loaded as its own function loads it.
 
     Returns
     -------
     list of str
     """
-    from exactgrasp.grasp.closing import closing_directions
     from exactgrasp.hands.builtins import get_builtin
     from exactgrasp.hands.dexterous import DEXTEROUS_HANDS, model_file
-    from exactgrasp.hands.hand import Hand
     from exactgrasp.hands.loading import compile_source, load_model
-    from exactgrasp.hands.palm import missing_palm_fix
     from exactgrasp.hands.scene import body_tree
 
+    options = {key: value for key, value in options.items() if value is not None}
+    geometry = options.setdefault("geometry", "collision")
     xml = BUILTIN_MJCF.get(model) if not Path(model).exists() else None
     path = f"{model}.xml" if xml is not None else model
-    packaged = model in DEXTEROUS_HANDS and not Path(model).exists()
-    if packaged:  # a built-in hand read from its package's file, cut at its root body
+    builtin = xml is not None and options.keys() <= {"geometry"}
+    if model in DEXTEROUS_HANDS and not Path(model).exists():  # read from its package's file
         path = str(model_file(model))
-        root_body = root_body or DEXTEROUS_HANDS[model]["root_body"]
-    mj_model = compile_source(path, geometry=geometry, package_dirs=package_dirs, xml=xml)
+        root = DEXTEROUS_HANDS[model]["root_body"]
+        builtin = options.setdefault("root_body", root) == root and options.keys() <= {
+            "geometry",
+            "root_body",
+        }
+    compiled = {k: options[k] for k in ("geometry", "package_dirs", "angle") if k in options}
+    mj_model = compile_source(path, xml=xml, **compiled)
     n_moving = sum(int(t) in (2, 3) for t in mj_model.jnt_type)
     lines = [
         f"{path}: {mj_model.nbody - 1} bodies, {mj_model.njnt} joints ({n_moving} hinge/slide), "
@@ -109,30 +135,47 @@ def inspect_lines(
     ]
     try:
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            if (xml is not None and root_body is None) or (
-                packaged and root_body == DEXTEROUS_HANDS[model]["root_body"]
-            ):  # with its palm frame and options
+            warnings.simplefilter("ignore")  # what matters is printed below
+            if builtin:  # with its palm frame and options
                 hand = get_builtin(model)().model
             else:
-                hand = load_model(
-                    path,
-                    root_body=root_body,
-                    geometry=geometry,
-                    package_dirs=package_dirs,
-                    xml=xml,
-                )
+                hand = load_model(path, xml=xml, **options)
     except ExactGraspError as exc:
-        return [*lines, f"as a hand: not loadable with these options: {exc}"]
-    root = f"root_body={root_body!r}" if root_body else "the whole model"
+        return [*lines, *_report(exc, path if xml is None else None, options)]
+    root = f"root_body={options['root_body']!r}" if options.get("root_body") else "the whole model"
     lines.append(f"as a hand ({root}): {len(hand.link_names)} links")
-    lines.append(f"  user-facing joints: {', '.join(hand.joint_names) or 'none'}")
+    return [*lines, *_hand_lines(hand, xml is None)]
+
+
+def _report(exc: ExactGraspError, source: str | None, options: dict) -> list[str]:
+    """A model that does not load: every problem on its line, with the missing palm frame
+    among them (as `Hand.from_mjcf` reports it), each fix spelled as a flag."""
+    from exactgrasp.hands.palm import missing_palm, palm_missing
+
+    problems = list(exc.problems) if isinstance(exc, ModelError) else [exc]
+    if source is not None and palm_missing(Path(source), options.get("palm")):
+        problems.append(missing_palm(Path(source).stem, source))
+    return [
+        f"as a hand: not loadable with these options ({len(problems)} problem(s), "
+        "each with its fix):",
+        *(f"  - {in_flag_terms(problem, MODEL_TERMS)}" for problem in problems),
+    ]
+
+
+def _hand_lines(hand: Any, from_file: bool) -> list[str]:
+    """The loaded hand: joints, warnings, couplings, palm frame and closing joints."""
+    from exactgrasp.grasp.closing import closing_directions
+    from exactgrasp.hands.hand import Hand
+    from exactgrasp.hands.palm import missing_palm_fix
+
+    lines = [f"  user-facing joints: {', '.join(hand.joint_names) or 'none'}"]
+    for caution in getattr(hand, "cautions", ()):
+        lines.append(f"  warning: {in_flag_terms(caution, MODEL_TERMS)}")
     for dep, (driver, ratio, offset) in hand.couplings.items():
         lines.append(f"  {dep} = {offset:g} + {ratio:g} * {driver}")
     if hand.palm is None:
-        lines.append(
-            f"  palm frame: none; {missing_palm_fix(hand.source if xml is None else None)}"
-        )
+        fix = ExactGraspError(*missing_palm_fix(hand.source if from_file else None))
+        lines.append(f"  palm frame: none; {in_flag_terms(fix, MODEL_TERMS)}")
         return [*lines, "  closing joints: found from the palm frame, once it is written"]
     p = hand.palm
     lines.append(
@@ -156,14 +199,37 @@ def _xyz(values) -> str:
 
 def cmd_inspect(args: argparse.Namespace) -> int:
     """Handler of ``exactgrasp inspect``; prints the tree, returns 0."""
-    dirs = package_dirs_from_args(args.package_dir)
     try:
-        lines = inspect_lines(args.model, args.geometry, dirs, args.root_body)
+        options = {
+            "geometry": args.geometry,
+            "root_body": args.root_body,
+            "package_dirs": package_dirs_from_args(args.package_dir),
+            "angle": args.angle,
+            "palm": json_option(args.palm, "--palm"),
+            "repair": args.repair or None,
+            "couplings": json_option(args.couplings, "--couplings"),
+        }
+        lines = inspect_lines(args.model, **options)
     except ModelError as exc:
-        raise in_flag_terms(exc, PACKAGE_DIR_TERMS) from exc
+        raise in_flag_terms(exc, MODEL_TERMS) from exc
     for line in lines:
         print(line)
     return 0
+
+
+def json_option(text: str | None, name: str) -> Any:
+    """A flag's value given as JSON text or as a JSON file (None when not given); `ModelError`
+    naming the flag when it is neither."""
+    if text is None:
+        return None
+    if not text.lstrip().startswith(("{", "[")) and text not in ("false", "null"):
+        if not Path(text).is_file():
+            raise ModelError(f"{name} {text!r}: neither JSON text nor a JSON file")
+        text = Path(text).read_text()
+    try:
+        return json.loads(text)
+    except ValueError as exc:
+        raise ModelError(f"{name}: not valid JSON ({exc})") from None
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -184,5 +250,32 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         action="append",
         metavar="[NAME=]DIR",
         help="where package:// and model:// mesh names are found (repeatable)",
+    )
+    parser.add_argument(
+        "--angle",
+        choices=ANGLES,
+        default=None,
+        help="the unit of an MJCF file's angles, replacing its <compiler angle> (default: "
+        "as the file says, else degree)",
+    )
+    parser.add_argument(
+        "--palm",
+        default=None,
+        metavar="PALM",
+        help='the palm frame as JSON text or a JSON file: {"origin": [x, y, z], "normal": '
+        '"+z", "up": "+y", "depth": d}, optionally with "body" or "site" (default: '
+        "palm_frame.json beside the model file)",
+    )
+    parser.add_argument(
+        "--repair",
+        action="store_true",
+        help="repair the model's mesh geoms that are not closed solids",
+    )
+    parser.add_argument(
+        "--couplings",
+        default=None,
+        metavar="COUPLINGS",
+        help='joints driven by others, as JSON text or a JSON file: {"dependent": ["driver", '
+        "ratio, offset]} (added to the model's own)",
     )
     return parser

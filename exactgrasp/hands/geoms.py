@@ -273,6 +273,7 @@ def collect_geoms(
     source: str,
     *,
     repair: bool,
+    problems: list,
 ) -> tuple[list[tuple[str, int, np.ndarray, np.ndarray]], tuple[str, ...]]:
     """The hand's geoms as closed meshes in their own frames.
 
@@ -292,6 +293,9 @@ def collect_geoms(
     repair : bool
         Repair mesh geoms that are not closed (`repair_mesh`), with one warning listing
         them; only the geoms kept (those of the hand's subtree) are checked at all.
+    problems : list
+        The `ModelError` of each geom that cannot be a closed mesh is appended here (and the
+        geom left out), for one report of the whole model.
 
     Returns
     -------
@@ -301,7 +305,47 @@ def collect_geoms(
     link_names : tuple of str
         The link names, in ``geoms`` order.
     """
+    kept = _kept_geoms(mj_model, in_tree, root, body_names, geometry, source)
+    per_body: dict[int, list[int]] = {}
     m = mj_model
+    for g in kept:
+        per_body.setdefault(int(m.geom_bodyid[g]), []).append(g)
+    geoms = []
+    repairs: list[str] | None = [] if repair else None
+    resolved: list[str] = []
+    welded: dict = {}  # one weld per mesh asset, however many geoms use it (None: failed)
+    for b, gs in per_body.items():
+        for g in gs:
+            body = body_names[b]
+            name = body if len(gs) == 1 else f"{body}/{m.geom(g).name or g}"
+            what = f"{source}: mesh geom {m.geom(g).name or g!r} of body {body!r}"
+            mesh = m.geom_type[g] == GEOM_MESH
+            key = ("mesh", int(m.geom_dataid[g])) if mesh else ("geom", g)
+            if key not in welded:
+                try:
+                    welded[key] = geom_mesh(m, g, tessellation, what, repairs, resolved)
+                except ModelError as exc:  # every geom's problem goes into one report
+                    problems.append(exc)
+                    welded[key] = None
+            if welded[key] is not None:
+                geoms.append((name, g, *welded[key]))
+    if resolved:
+        warn_caller(
+            f"{source}: resolved mesh geoms into the solids they bound: "
+            + " | ".join(line.removeprefix(f"{source}: ") for line in resolved)
+        )
+    if repairs:
+        warn_caller(
+            f"{source}: repaired {len(repairs)} mesh geom(s) (repair=True): "
+            + "; ".join(line.removeprefix(f"{source}: ") for line in repairs)
+            + " (the 'before' volume of an open mesh is only nominal)"
+        )
+    return geoms, tuple(entry[0] for entry in geoms)
+
+
+def _kept_geoms(m, in_tree, root: int, body_names, geometry: str, source: str) -> list[int]:
+    """The geoms of the hand (of the chosen kind, in the subtree, solid); what is left out is
+    warned about, and no geom at all is a `ModelError` saying what to do."""
     kept, outside, not_solid, other = [], [], [], 0
     for g in range(m.ngeom):
         b, kind = int(m.geom_bodyid[g]), int(m.geom_type[g])
@@ -344,34 +388,4 @@ def collect_geoms(
             f"{source}: no {geometry} geometry in the hand's subtree (root {body_names[root]!r})",
             *hint,
         )
-    per_body: dict[int, list[int]] = {}
-    for g in kept:
-        per_body.setdefault(int(m.geom_bodyid[g]), []).append(g)
-    geoms = []
-    repairs: list[str] | None = [] if repair else None
-    resolved: list[str] = []
-    welded = {}  # one weld per mesh asset, however many geoms use it
-    for b, gs in per_body.items():
-        for g in gs:
-            body = body_names[b]
-            name = body if len(gs) == 1 else f"{body}/{m.geom(g).name or g}"
-            what = f"{source}: mesh geom {m.geom(g).name or g!r} of body {body!r}"
-            key = int(m.geom_dataid[g]) if m.geom_type[g] == GEOM_MESH else None
-            if key is None or key not in welded:
-                V, F = geom_mesh(m, g, tessellation, what, repairs, resolved)
-                if key is not None:
-                    welded[key] = V, F
-            V, F = welded[key] if key is not None else (V, F)
-            geoms.append((name, g, V, F))
-    if resolved:
-        warn_caller(
-            f"{source}: resolved mesh geoms into the solids they bound: "
-            + " | ".join(line.removeprefix(f"{source}: ") for line in resolved)
-        )
-    if repairs:
-        warn_caller(
-            f"{source}: repaired {len(repairs)} mesh geom(s) (repair=True): "
-            + "; ".join(line.removeprefix(f"{source}: ") for line in repairs)
-            + " (the 'before' volume of an open mesh is only nominal)"
-        )
-    return geoms, tuple(entry[0] for entry in geoms)
+    return kept

@@ -18,14 +18,14 @@ from typing import Any, Protocol
 import numpy as np
 import trimesh
 
-from exactgrasp.errors import Fix, FrameError, JointError, MeshError
+from exactgrasp.errors import Fix, FrameError, JointError, MeshError, ModelError
 from exactgrasp.geometry.intake import REPAIR
 from exactgrasp.geometry.solid import Solid
 from exactgrasp.given import given
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.loading import jsonable, load_model_cached
 from exactgrasp.hands.noise import joint_noise
-from exactgrasp.hands.palm import missing_palm_fix
+from exactgrasp.hands.palm import missing_palm, palm_missing
 from exactgrasp.hands.prepared import union_volume_of_links
 
 __all__ = ["Hand", "HandModel", "RigidModel"]
@@ -122,7 +122,7 @@ class Hand:
                 )
             if palm is None:
                 source = getattr(model, "source", None)
-                raise FrameError(f"{model.name} has no palm frame; {missing_palm_fix(source)}.")
+                raise missing_palm(model.name, source)
             frame = _frame_from_palm(palm)
         if not isinstance(frame, HandFrame):
             raise FrameError(f"frame must be a HandFrame, got {type(frame).__name__}.")
@@ -215,6 +215,7 @@ class Hand:
         couplings: dict | None = None,
         package_dirs: Any = None,
         repair: bool | None = None,
+        angle: str | None = None,
     ) -> Hand:
         """An articulated hand from an MJCF or URDF model, compiled by mujoco.
 
@@ -239,6 +240,8 @@ class Hand:
             Where ``package://NAME/...`` and ``model://NAME/...`` mesh names are found.
         repair : bool, optional
             Repair open mesh geoms of the hand (with a warning per geom).
+        angle : {"degree", "radian"}, optional
+            The unit of an MJCF file's angles; None: as the file says.
 
         Returns
         -------
@@ -253,9 +256,16 @@ class Hand:
                 "couplings": couplings,
                 "package_dirs": package_dirs,
                 "repair": repair,
+                "angle": angle,
             }
         )
-        model = load_model_cached(Path(path), options)
+        try:
+            model = load_model_cached(Path(path), options)
+        except ModelError as exc:
+            if frame is None and palm_missing(Path(path), palm):
+                problem = missing_palm(Path(path).stem, str(path))
+                raise ModelError.report(str(path), [exc, problem]) from exc
+            raise
         source = {"type": "model", "path": str(Path(path)), "options": jsonable(options)}
         return cls(model, joints=joints, frame=frame, on_limit=on_limit, source=source)
 

@@ -9,6 +9,7 @@ import numpy as np
 
 from exactgrasp.errors import ModelError, warn_caller
 from exactgrasp.hands.geoms import JOINT_HINGE, JOINT_SLIDE
+from exactgrasp.hands.tendons import soft_tendons, tendon_couplings
 
 __all__ = ["JOINT_LIMIT_TOL", "SLIDE_LIMIT_TOL", "JointTable", "collect_joints"]
 
@@ -87,7 +88,8 @@ def collect_joints(mj_model, in_tree: np.ndarray, root: int, couplings, source: 
         The hand's root body; its own joints place it in the scene and are left out.
     couplings : dict, optional
         User couplings ``{dependent: (driver, ratio[, offset])}``, added to (and overriding)
-        the model's own linear joint equalities.
+        the model's own linear joint equalities and fixed-tendon equalities
+        (`exactgrasp.hands.tendons`).
     source : str
         The model file, for messages.
 
@@ -110,7 +112,7 @@ def collect_joints(mj_model, in_tree: np.ndarray, root: int, couplings, source: 
             "exposed)"
         )
     joint_ids = {m.joint(j).name: j for j in hinge_slide}
-    eq = _model_couplings(m, source)
+    eq = {**tendon_couplings(m, source), **_model_couplings(m, source)}
     for dep, spec in (couplings or {}).items():
         if isinstance(spec, str) or len(spec) not in (2, 3):
             raise ModelError(
@@ -130,6 +132,7 @@ def collect_joints(mj_model, in_tree: np.ndarray, root: int, couplings, source: 
                 f"{source}: coupling driver {driver!r} is itself "
                 "coupled; chains of couplings are not supported"
             )
+    soft_tendons(m, source, set(joint_ids), set(eq))
     joint_names = tuple(n for n in joint_ids if n not in eq)
     joint_limits = {}
     for n in joint_names:

@@ -18,13 +18,14 @@ from pathlib import Path
 from typing import Any
 
 from exactgrasp.cache import LRUCache
-from exactgrasp.errors import ModelError
+from exactgrasp.errors import Fix, ModelError, warn_caller
 from exactgrasp.geometry.files import file_identity
 from exactgrasp.geometry.intake import REPAIR
+from exactgrasp.hands.angles import angle_problem, check_angle, written_angle
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.model import KinematicModel
 from exactgrasp.hands.packages import PackageResolver, package_env, rewrite_spec, rewrite_urdf
-from exactgrasp.hands.palm import PalmSpec, resolve_palm
+from exactgrasp.hands.palm import PALM_FILE, PalmSpec, palm_from_file, resolve_palm
 
 __all__ = [
     "MODEL_CACHE_SIZE",
@@ -41,6 +42,8 @@ __all__ = [
 #: cereal-box grasps, a batch) compiles its URDF once, not once per grasp.
 MODEL_CACHE_SIZE = 8
 _MODELS = LRUCache(MODEL_CACHE_SIZE)
+#: Where else ``angle`` is set, for warnings (which no front end re-spells).
+ELSEWHERE = ' (in a grasp file: "hand_options": {"angle": ...}; on the command line: --angle)'
 
 
 def urdf_for_mujoco(path: Path, geometry: str, resolver: PackageResolver | None = None) -> str:
@@ -114,6 +117,8 @@ def compile_source(
     geometry: str = "collision",
     package_dirs=None,
     xml: str | None = None,
+    angle: str | None = None,
+    cautions: list[ModelError] | None = None,
 ):
     """Compile an MJCF or URDF file (or MJCF text) with its mesh URIs resolved.
 
@@ -127,6 +132,12 @@ def compile_source(
         See `exactgrasp.hands.packages.PackageResolver`.
     xml : str, optional
         MJCF text to compile instead of reading ``path``.
+    angle : {"degree", "radian"}, optional
+        The unit of an MJCF file's angles, replacing its ``<compiler angle>`` (a URDF's are
+        radians). None: as the file says (MuJoCo's default: degree).
+    cautions : list, optional
+        Given: a `ModelError` is appended, not raised, for what compiles but is likely wrong
+        (`exactgrasp.hands.angles.angle_problem`).
 
     Returns
     -------
@@ -134,6 +145,7 @@ def compile_source(
     """
     import mujoco  # here, not at the top: importing exactgrasp stays light
 
+    angle = check_angle(angle)
     path = Path(path)
     source = str(path)
     if xml is None and not path.is_file():
@@ -143,6 +155,12 @@ def compile_source(
     if path.suffix.lower() == ".urdf":
         if xml is not None:
             raise ModelError("xml= takes MJCF text; load a URDF from its file")
+        if angle == "degree":
+            raise ModelError(
+                f"{source}: a URDF's angles are radians; ",
+                Fix("angle", "degree"),
+                " applies to MJCF files only: leave angle=None",
+            )
         return compile_model(mujoco, source, xml=urdf_for_mujoco(path, geometry, resolver))
     # MjSpec parses without reading assets, so URI file names can be replaced first.
     spec = _compiled(
@@ -153,7 +171,12 @@ def compile_source(
             else mujoco.MjSpec.from_file(str(path))
         ),
     )
-    if rewrite_spec(spec, resolver):
+    if cautions is not None and angle is None:
+        problem = angle_problem(source, spec, written_angle(path, xml))
+        cautions.extend([problem] if problem is not None else [])
+    if angle is not None:
+        spec.compiler.degree = angle == "degree"
+    if rewrite_spec(spec, resolver) or angle is not None:
         return _compiled(source, spec.compile)
     return compile_model(mujoco, source, path=path, xml=xml)
 
@@ -168,6 +191,7 @@ def load_model(
     couplings=None,
     package_dirs=None,
     repair: bool = REPAIR,
+    angle: str | None = None,
     xml: str | None = None,
 ) -> KinematicModel:
     """Compile an MJCF (.xml) or URDF (.urdf) hand model with MuJoCo.
@@ -205,6 +229,12 @@ def load_model(
         Repair mesh geoms of the hand that are not closed solids (as ``Solid(repair=True)``:
         merge vertices, fix winding, fill holes), with one warning listing each repaired
         geom with its volume before and after. Only geoms of the hand's subtree are checked.
+    angle : {"degree", "radian"}, optional
+        The unit of an MJCF file's angles (joint ranges and references, ``euler`` and
+        ``axisangle`` orientations), replacing its ``<compiler angle>``. None (default): as
+        the file says, else MuJoCo's default, degree, with a warning when the file says
+        nothing and every hinge range would fit within +-2 pi as radians (see
+        `exactgrasp.hands.angles`). A URDF's angles are radians.
     xml : str, optional
         Model text to compile instead of reading ``path`` (for bundled MJCF models).
 
@@ -212,18 +242,15 @@ def load_model(
     -------
     KinematicModel
     """
-    if geometry not in ("collision", "visual", "all"):
-        raise ModelError(f"geometry must be 'collision', 'visual' or 'all', got {geometry!r}")
-    if isinstance(tessellation, bool) or int(tessellation) != tessellation or tessellation < 4:
-        raise ModelError(f"tessellation must be an integer >= 4, got {tessellation!r}")
-    if not isinstance(repair, bool):
-        raise ModelError(f"repair must be True or False, got {repair!r}")
+    _check_options(geometry, tessellation, repair)
     path = Path(path)
-    mj_model = compile_source(path, geometry=geometry, package_dirs=package_dirs, xml=xml)
-    name = bytes(mj_model.names).split(b"\0", 1)[0].decode() or path.stem
+    cautions: list[ModelError] = []
+    mj_model = compile_source(
+        path, geometry=geometry, package_dirs=package_dirs, xml=xml, angle=angle, cautions=cautions
+    )
     model = KinematicModel(
         mj_model,
-        name=name,
+        name=bytes(mj_model.names).split(b"\0", 1)[0].decode() or path.stem,
         source=str(path),
         root_body=root_body,
         geometry=geometry,
@@ -231,13 +258,34 @@ def load_model(
         couplings=couplings,
         repair=repair,
     )
-    if palm is None and xml is None and (path.parent / "palm_frame.json").is_file():
-        try:
-            palm = json.loads((path.parent / "palm_frame.json").read_text())
-        except (OSError, ValueError) as exc:
-            raise ModelError(f"{path.parent / 'palm_frame.json'}: unreadable ({exc})") from None
-    model.palm = resolve_palm(model, palm or None)
+    return _with_palm(model, path, None if xml is not None else palm_from_file, palm, cautions)
+
+
+def _with_palm(model: KinematicModel, path: Path, read, palm, cautions) -> KinematicModel:
+    """``model`` with its palm frame (``palm``, else ``read(path)`` when given), or one
+    `ModelError` reporting every problem found while loading it, ``cautions`` among them."""
+    problems = model.problems
+    try:
+        if palm is None and read is not None:
+            palm = read(path)
+        model.palm = resolve_palm(model, palm or None)
+    except ModelError as exc:  # reported with the geoms' problems
+        problems.append(exc)
+    if problems:
+        raise ModelError.report(str(path), [*problems, *cautions])
+    model.cautions = tuple(cautions)
+    for caution in cautions:
+        warn_caller(f"{caution}{ELSEWHERE}")
     return model
+
+
+def _check_options(geometry, tessellation, repair) -> None:
+    if geometry not in ("collision", "visual", "all"):
+        raise ModelError(f"geometry must be 'collision', 'visual' or 'all', got {geometry!r}")
+    if isinstance(tessellation, bool) or int(tessellation) != tessellation or tessellation < 4:
+        raise ModelError(f"tessellation must be an integer >= 4, got {tessellation!r}")
+    if not isinstance(repair, bool):
+        raise ModelError(f"repair must be True or False, got {repair!r}")
 
 
 def jsonable(options: dict[str, Any]) -> dict[str, Any]:
@@ -279,7 +327,7 @@ def load_model_cached(path: Path, options: dict[str, Any]) -> KinematicModel:
     """
     key = (
         file_identity(path),
-        file_identity(path.parent / "palm_frame.json"),
+        file_identity(path.parent / PALM_FILE),
         json.dumps(jsonable(options), sort_keys=True, default=repr),
         tuple(sorted(package_env().items())),  # where package:// names resolve to
     )

@@ -69,11 +69,24 @@ class KinematicModel:
         self.joint_names = table.joint_names
         self.joint_limits = table.joint_limits
         self.default_joints = table.default_joints
+        #: What keeps the model from being a hand (each geom's `ModelError`), for
+        #: `exactgrasp.hands.loading.load_model` to report together; empty once loaded.
+        self.problems: list = []
         # (link name, geom id, V local, F) per geom
         self._geoms, self.link_names = collect_geoms(
-            mj_model, in_tree, self._root, names, geometry, tessellation, source, repair=repair
+            mj_model,
+            in_tree,
+            self._root,
+            names,
+            geometry,
+            tessellation,
+            source,
+            repair=repair,
+            problems=self.problems,
         )
         self.palm: PalmSpec | None = None
+        #: What loaded but is likely wrong, each warned once (`ModelError` s, not raised).
+        self.cautions: tuple[ModelError, ...] = ()
 
     def check_joints(
         self, joints: Mapping | None = None, on_limit: str = "error", tol: float | None = None

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -10,9 +11,21 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.errors import ModelError
+from exactgrasp.errors import Fix, FrameError, ModelError
 
-__all__ = ["AXES", "PalmSpec", "missing_palm_fix", "palm_axis", "resolve_palm"]
+__all__ = [
+    "AXES",
+    "PALM_FILE",
+    "PALM_KEYS",
+    "PalmSpec",
+    "is_keyed",
+    "missing_palm",
+    "missing_palm_fix",
+    "palm_axis",
+    "palm_from_file",
+    "palm_missing",
+    "resolve_palm",
+]
 
 #: Axis names of a frame: column index, or ``-(index + 1)`` for the negative axis.
 AXES = {"+x": 0, "x": 0, "+y": 1, "y": 1, "+z": 2, "z": 2, "-x": -1, "-y": -2, "-z": -3}
@@ -63,9 +76,52 @@ class PalmSpec:
         object.__setattr__(self, "depth", float(self.depth))
 
 
-def missing_palm_fix(source: str | None) -> str:
-    """The one fix for a model file without a palm frame, as the error of `Hand` and
-    ``exactgrasp inspect`` both give it.
+#: The palm frame's keys, as ``palm_frame.json`` and ``palm=`` hold them in hand coordinates.
+PALM_KEYS = '{"origin": [x, y, z], "normal": [x, y, z], "up": [x, y, z], "depth": d}'
+#: The file of palm frames beside a model file.
+PALM_FILE = "palm_frame.json"
+
+
+def palm_from_file(path: Path) -> dict | None:
+    """The palm frame ``palm_frame.json`` beside the model file ``path`` gives it, if any.
+
+    The file holds one palm frame (a dict of `PalmSpec` keys, optionally naming a body or
+    site), or, for a folder of several models, a JSON object keyed by model file name
+    (``{"robotiq.xml": {...}, "panda_hand.urdf": {...}}``), each value a palm frame.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The model file.
+
+    Returns
+    -------
+    dict or None
+        None when there is no such file, or a keyed file has no entry for ``path.name``.
+    """
+    file = path.parent / PALM_FILE
+    if not file.is_file():
+        return None
+    try:
+        palm = json.loads(file.read_text())
+    except (OSError, ValueError) as exc:
+        raise ModelError(f"{file}: unreadable ({exc})") from None
+    if not isinstance(palm, dict):
+        raise ModelError(f"{file}: expected a JSON object (a palm frame), got {type(palm)}")
+    if not is_keyed(palm):
+        return palm
+    return palm.get(path.name)
+
+
+def is_keyed(palm: dict) -> bool:
+    """Whether a ``palm_frame.json`` object is keyed by model file name (every value an
+    object: a palm frame's own values are numbers, lists and strings)."""
+    return bool(palm) and all(isinstance(value, dict) for value in palm.values())
+
+
+def missing_palm_fix(source: str | None) -> tuple[str | Fix, ...]:
+    """The fix for a model file without a palm frame, as the error of `Hand` and
+    ``exactgrasp inspect`` both give it: write ``palm_frame.json``, or pass ``palm=``.
 
     Parameters
     ----------
@@ -74,18 +130,32 @@ def missing_palm_fix(source: str | None) -> str:
 
     Returns
     -------
-    str
-        Where to write ``palm_frame.json`` and what it holds, in the user's terms.
+    tuple of (str or Fix)
+        Message parts, in the user's terms: where to write the palm frame and what it holds,
+        or the ``palm=`` argument (a front end spells it as its own option).
     """
-    where = "beside the model file" if not source else str(Path(source).parent / "palm_frame.json")
+    file = Path(source).parent / PALM_FILE if source else None
+    keyed = file is not None and file.is_file() and _keyed_file(file)
+    if keyed:
+        where = f'add "{Path(source).name}": {PALM_KEYS} to {file} (keyed by model file name)'
+    else:
+        into = "beside the model file" if file is None else str(file)
+        where = f"write the palm frame into {into}: {PALM_KEYS}"
     return (
-        f"write the palm frame into {where}: "
-        '{"origin": [x, y, z], "normal": [x, y, z], "up": [x, y, z], "depth": d} in the '
-        "model's coordinates (metres): the centre of the palm's face, the direction out of the "
-        "palm, the direction along the palm towards the thumb (or a chosen side), and the "
-        "distance from the palm to the outside of the loosely closed fingers "
-        "(see docs/tutorial.md, 'The palm frame')"
+        f"{where} in the model's coordinates (metres): the centre of the palm's face, the "
+        "direction out of the palm, the direction along the palm towards the thumb (or a "
+        "chosen side), and the distance from the palm to the outside of the loosely closed "
+        "fingers (see docs/tutorial.md, 'The palm frame')",
+        Fix("palm", form="pass", shown=PALM_KEYS, before=", or "),
     )
+
+
+def _keyed_file(file: Path) -> bool:
+    try:
+        palm = json.loads(file.read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(palm, dict) and is_keyed(palm)
 
 
 def palm_axis(value: Any, R: np.ndarray, what: str) -> np.ndarray:
@@ -145,3 +215,20 @@ def resolve_palm(model: Any, palm: Any) -> PalmSpec | None:
         palm_axis(palm["up"], R, "up"),
         palm["depth"],
     )
+
+
+def missing_palm(name: str, source: str | None) -> FrameError:
+    """The error of a hand ``name`` (model file ``source``) built without a frame or a palm
+    frame: write ``palm_frame.json`` or pass ``palm=`` (`missing_palm_fix`)."""
+    return FrameError(f"{name} has no palm frame; ", *missing_palm_fix(source), ".")
+
+
+def palm_missing(path: Path, palm: Any) -> bool:
+    """Whether a model file loaded with ``palm`` has no palm frame (an unreadable
+    ``palm_frame.json`` is a problem of its own, reported by the load)."""
+    if palm is not None:
+        return palm is False
+    try:
+        return palm_from_file(path) is None
+    except ModelError:
+        return False
