@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import dataclasses
+import os
 import sys
 import warnings
 from dataclasses import dataclass
@@ -367,16 +368,25 @@ def run_reporting_errors(
     -------
     int
         The handler's exit status; 2 after printing ``PROG: error: MESSAGE`` to stderr for an
-        `ExactGraspError`; 130 after printing ``interrupted`` for a KeyboardInterrupt.
+        `ExactGraspError`; 130 after printing ``interrupted`` for a KeyboardInterrupt; 141,
+        silently, when the reader of stdout has gone (``| head``): what a Unix tool killed by
+        SIGPIPE gives the shell (128 + 13).
     """
     try:
-        return int(handler(args) or 0)
+        status = int(handler(args) or 0)
+        sys.stdout.flush()  # here, where a closed pipe can still be told apart
+        return status
     except ExactGraspError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # What is still buffered would fail again at exit, with a traceback: drop it.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
 
 
 def require(module: str, feature: str, package: str | None = None, extra: str = "all"):
