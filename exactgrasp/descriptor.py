@@ -160,7 +160,9 @@ def compute_descriptor(
         estimator; ``"exact"``) or a configured instance, e.g.
         ``ExactBackend(broadphase=None, n_jobs=1)``.
     progress : bool, optional
-        Show a progress bar; default: only when stderr is a terminal.
+        Show a progress bar (True) or nothing (False); default: a bar when stderr is a
+        terminal, else a plain line at most every 5 s of a long call
+        (`exactgrasp.progress.ProgressLog`).
 
     Returns
     -------

@@ -1,5 +1,6 @@
 """Exception types, `Fix` (the setting that fixes an error), `require` for optional
-dependencies, `warn_caller` and `run_reporting_errors`.
+dependencies, `warn_caller`, `warn_once` (with `recording_warnings`) and
+`run_reporting_errors`.
 
 Every message names the input, what is wrong with it and how to fix it. Every exception class
 of exactgrasp is defined here (and exported from `exactgrasp`). This module imports nothing from
@@ -10,11 +11,16 @@ the error, the value that does and how the sentence uses it). ``str(exc)`` spell
 Python argument (``pass repair=True``); a front end that sets the same parameter another way
 (a grasp-file key, a command-line flag) re-spells the same parts with `ExactGraspError.respelled`
 and a function from a `Fix` to its own words. Nothing parses a message's text.
+
+Long because every exception class of the package is here, with the helpers that warn.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import dataclasses
+import os
 import sys
 import warnings
 from dataclasses import dataclass
@@ -23,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     import argparse
-    from collections.abc import Callable, Sequence
+    from collections.abc import Callable, Iterator, Sequence
     from types import FrameType
 
 _PACKAGE_DIR = str(Path(__file__).resolve().parent)
@@ -324,6 +330,12 @@ class SeparationError(ExactGraspError, ValueError):
     found within the limits."""
 
 
+class MeshWarning(UserWarning):
+    """A mesh, its shells or a hand model was changed on loading (repaired, merged, flipped),
+    or parts of it were left out: given once per distinct message per process (`warn_once`).
+    """
+
+
 class DataError(ExactGraspError, FileNotFoundError):
     """The shared data folder is missing or incomplete."""
 
@@ -355,10 +367,42 @@ def warned_here(warning: warnings.WarningMessage, site: tuple[str, int]) -> bool
     return warning.filename.startswith(_PACKAGE_DIR) or (warning.filename, warning.lineno) == site
 
 
-def warn_caller(message: str) -> None:
+def warn_caller(message: str, category: type[Warning] = UserWarning) -> None:
     """Warn at the first caller outside exactgrasp, however deep inside the package we are."""
     _, steps = _first_outside(sys._getframe(1))
-    warnings.warn(message, UserWarning, stacklevel=2 + steps)
+    warnings.warn(message, category, stacklevel=2 + steps)
+
+
+#: The `warn_once` messages given in this process (clear it to hear them again).
+WARNED: set[str] = set()
+# Set while `recording_warnings` records what a build says, to be replayed (and counted) by
+# the caller: a record kept in a cache, on disk too, must hold every message.
+_RECORDING: contextvars.ContextVar[bool] = contextvars.ContextVar("recording", default=False)
+
+
+def warn_once(message: str) -> None:
+    """`warn_caller` with a `MeshWarning`, once per distinct message per process: the same
+    mesh loaded or intersected again has nothing new to say (`WARNED` keeps what was said)."""
+    recording = _RECORDING.get()
+    if message in WARNED and not recording:
+        return
+    _, steps = _first_outside(sys._getframe(1))
+    warnings.warn(message, MeshWarning, stacklevel=2 + steps)
+    if not recording:  # after: a warning turned into an error (-W error) is raised again
+        WARNED.add(message)
+
+
+@contextlib.contextmanager
+def recording_warnings() -> Iterator[list[warnings.WarningMessage]]:
+    """Record every warning given inside the block (`warn_once`'s too, repeated or not, and
+    not counted as given): for a cached build whose warnings its callers replay."""
+    token = _RECORDING.set(True)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            yield caught
+    finally:
+        _RECORDING.reset(token)
 
 
 def run_reporting_errors(
@@ -379,16 +423,25 @@ def run_reporting_errors(
     -------
     int
         The handler's exit status; 2 after printing ``PROG: error: MESSAGE`` to stderr for an
-        `ExactGraspError`; 130 after printing ``interrupted`` for a KeyboardInterrupt.
+        `ExactGraspError`; 130 after printing ``interrupted`` for a KeyboardInterrupt; 141,
+        silently, when the reader of stdout has gone (``| head``): what a Unix tool killed by
+        SIGPIPE gives the shell (128 + 13).
     """
     try:
-        return int(handler(args) or 0)
+        status = int(handler(args) or 0)
+        sys.stdout.flush()  # here, where a closed pipe can still be told apart
+        return status
     except ExactGraspError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # What is still buffered would fail again at exit, with a traceback: drop it.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
 
 
 def require(module: str, feature: str, package: str | None = None, extra: str = "all"):

@@ -3,7 +3,9 @@
 Two meshes in any of the usual forms (trimesh meshes, `Solid`s, (vertices, faces) pairs, mesh
 files) go through the same intake as every `Solid` (units, repair, shells), then through the
 exact backend's `ExactIntersector` (certified error bounds, manifold3d boolean where a sign
-cannot be certified). See ``docs/penetration-volume.md``.
+cannot be certified). A posed `Hand` takes part as the union of its posed links, and a `Grasp`
+as its hand and its object at the grasp's pose, in the hand's coordinates (metres). See
+``docs/penetration-volume.md``.
 """
 
 from __future__ import annotations
@@ -23,6 +25,8 @@ from exactgrasp.backends.voxel import VoxelBackend
 from exactgrasp.errors import BackendError, Fix, MeshError
 from exactgrasp.geometry.intake import REPAIR, UNITS, unit_scale
 from exactgrasp.geometry.solid import Solid
+from exactgrasp.grasp.grasp import Grasp
+from exactgrasp.hands.hand import Hand
 
 __all__ = ["Overlap", "as_solid", "intersection", "intersection_gradient", "intersection_volume"]
 
@@ -32,6 +36,8 @@ ACCEPTED = (
     "path of a mesh file (STL, OBJ, PLY, OFF, GLB)"
 )
 UNIT_NAMES = sorted(set(UNITS) - {"in"})
+#: What `intersection` takes besides `as_solid`'s forms, for messages.
+ACCEPTED_MORE = "an exactgrasp.Hand (its posed links' union)"
 
 
 def as_solid(
@@ -90,6 +96,48 @@ def as_solid(
         vertices, faces = _arrays(mesh, name)
         return Solid(vertices, faces, name=name, **options)
     raise MeshError(f"{name}: got {type(mesh).__name__}; pass {ACCEPTED}.")
+
+
+def _operand(mesh: Any, name: str, **options: Any) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``mesh`` as the (vertices, faces) pairs, metres, whose union is the solid: a `Hand`'s
+    posed links (hand coordinates, as `Hand.link_arrays`), else `as_solid`'s one solid."""
+    if isinstance(mesh, Hand):
+        return mesh.link_arrays()
+    if isinstance(mesh, Grasp):
+        raise MeshError(
+            f"{name}: got a Grasp, which holds both meshes; pass it alone as a "
+            "(intersection_volume(grasp, poses=...)), or its hand and object as a and b."
+        )
+    pair = isinstance(mesh, tuple | list) and len(mesh) == 2
+    if not pair and not isinstance(
+        mesh, Solid | trimesh.Trimesh | trimesh.Scene | str | os.PathLike
+    ):
+        raise MeshError(f"{name}: got {type(mesh).__name__}; pass {ACCEPTED}, or {ACCEPTED_MORE}.")
+    solid = as_solid(mesh, name, **options)
+    return [(solid.vertices, solid.faces)]
+
+
+def _operands(a: Any, b: Any, units: tuple[str, str], **options: Any) -> tuple[list, list]:
+    """The meshes of ``a`` (fixed) and ``b`` (moving), each a list of (vertices, faces) whose
+    union is the solid: a `Grasp` in ``a`` gives its hand and its object at the grasp's pose."""
+    if isinstance(a, Grasp):
+        if b is not None:
+            raise MeshError(
+                f"b: got {type(b).__name__} beside a Grasp, which holds both meshes; pass the "
+                "grasp alone (intersection_volume(grasp, poses=...)), or a Hand as a and the "
+                "object as b."
+            )
+        R, t = a.object_pose[:3, :3], a.object_pose[:3, 3]
+        return a.hand.link_arrays(), [(a.object.vertices @ R.T + t, a.object.faces)]
+    if b is None:
+        raise MeshError(
+            f"b: missing; pass the mesh that moves ({ACCEPTED}, or {ACCEPTED_MORE}), or pass a "
+            "Grasp alone as a."
+        )
+    return (
+        _operand(a, "a", units=units[0], **options),
+        _operand(b, "b", units=units[1], **options),
+    )
 
 
 def _arrays(pair: tuple | list, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -170,16 +218,14 @@ def _setup(a, b, poses, backend, *, units="m", repair=REPAIR, check_scale=True):
     single = poses is None
     arr = check_poses(np.eye(4) if single else poses, name="poses")
     single = single or arr.ndim == 2
-    A = as_solid(a, "a", units=units_a, repair=bool(repair), check_scale=check_scale)
-    B = as_solid(b, "b", units=units_b, repair=bool(repair), check_scale=check_scale)
+    A, B = _operands(a, b, (units_a, units_b), repair=bool(repair), check_scale=check_scale)
     if arr.size == 0:
         return single, arr, None
-    intersector = backend.intersector_of([(A.vertices, A.faces)], [(B.vertices, B.faces)])
-    return single, arr, intersector
+    return single, arr, backend.intersector_of(A, B)
 
 
 def intersection_volume(
-    a: Any, b: Any, poses: Any = None, backend: str | ExactBackend = "exact", **options: Any
+    a: Any, b: Any = None, poses: Any = None, backend: str | ExactBackend = "exact", **options: Any
 ) -> Any:
     """Exact volume of ``a`` ∩ ``b`` (moved rigidly by each pose), in m^3: `intersection`'s
     volumes alone.
@@ -202,7 +248,7 @@ def intersection_volume(
 
 def intersection(
     a: Any,
-    b: Any,
+    b: Any = None,
     poses: Any = None,
     backend: str | ExactBackend = "exact",
     *,
@@ -221,11 +267,15 @@ def intersection(
 
     Parameters
     ----------
-    a, b : trimesh.Trimesh, Solid, (vertices, faces) or path-like
-        Closed meshes (see `as_solid`). ``b`` is the one that moves.
+    a, b : trimesh.Trimesh, Solid, (vertices, faces), path-like or Hand
+        Closed meshes (see `as_solid`). ``b`` is the one that moves. A `Hand` is the union of
+        its posed links in its own coordinates (metres), as the descriptor takes it. ``a``
+        may also be a `Grasp`, with ``b`` None: its hand, and its object at the grasp's pose
+        (``object_pose``) in the hand's coordinates, the object the one that moves.
     poses : array_like, shape (4, 4) or (..., 4, 4), optional
         Rigid motions of ``b`` in ``a``'s frame: a vertex ``x`` of ``b`` (metres, after the
-        unit conversion) moves to ``R @ x + t``, ``t`` in metres. None: ``b`` as given.
+        unit conversion; for a `Grasp`, the object already at its pose) moves to
+        ``R @ x + t``, ``t`` in metres. None: ``b`` as given (a `Grasp` as it is).
     backend : "exact" or ExactBackend
         Only the exact backend applies to two arbitrary meshes; ``"voxel"`` is refused. The
         name means its library defaults (`exactgrasp.backends.defaults`); an instance sets
@@ -233,7 +283,7 @@ def intersection(
         The volumes do not depend on either.
     units : {"m", "cm", "mm", "inch"} or (str, str)
         Unit of the meshes' coordinates: one for both, or (units of a, units of b). Not
-        applied to `Solid` inputs (already in metres).
+        applied to `Solid`, `Hand` or `Grasp` inputs (already in metres).
     repair : bool
         Let trimesh and pymeshfix close and orient both meshes, with a warning.
     check_scale : bool
@@ -249,7 +299,7 @@ def intersection(
     ------
     MeshError
         A mesh in a form not accepted or not a closed solid (the message names ``a`` or
-        ``b``), or unknown ``units``.
+        ``b``), a missing ``b``, a ``b`` beside a `Grasp`, or unknown ``units``.
     BackendError
         A pose that is not a rigid motion (the message names ``poses`` and its index), a
         ``backend`` other than the exact one.
@@ -267,7 +317,7 @@ def intersection(
 
 
 def intersection_gradient(
-    a: Any, b: Any, poses: Any = None, backend: str | ExactBackend = "exact", **options: Any
+    a: Any, b: Any = None, poses: Any = None, backend: str | ExactBackend = "exact", **options: Any
 ) -> np.ndarray:
     """Derivative of the exact volume of ``a`` ∩ ``b`` by a rigid motion of ``b``.
 

@@ -1,5 +1,10 @@
-"""Progress bars that stay quiet when nobody is watching, and that say so, with their clock
-still ticking, while the package's kernels compile (first use only).
+"""Progress bars on a terminal, plain log lines on a long call when stderr is not one, and
+the bars' clock still ticking while the package's kernels compile (first use only).
+
+Where stderr is not a terminal (a log file, a pipe, a job's output) and nobody chose
+(``progress=None``), a bar's redrawn line would fill the log with carriage returns;
+`ProgressLog` writes one plain line at most every `LOG_SECONDS` instead, the first only once
+a call has run that long, so a short call writes nothing.
 
 `progress_bar` gives a tqdm bar whose rate and time left leave out its first update: the first
 results of a run may include compiling the kernels, which happens once, and would make the
@@ -16,7 +21,10 @@ from __future__ import annotations
 import os
 import sys
 import threading
+import time
 import weakref
+from collections.abc import Callable
+from typing import IO
 
 from tqdm.auto import tqdm
 
@@ -24,8 +32,10 @@ from exactgrasp.compiling import COMPILE_SECONDS, compile_seconds, on_compile
 
 __all__ = [
     "COMPILE_SECONDS",
+    "LOG_SECONDS",
     "TICK_SECONDS",
     "ProgressBar",
+    "ProgressLog",
     "compile_seconds",
     "progress_bar",
     "progress_enabled",
@@ -33,11 +43,14 @@ __all__ = [
 
 #: How often the open bars are redrawn while kernels compile (their clock keeps ticking).
 TICK_SECONDS = 0.5
+#: Fewest seconds between two lines of a `ProgressLog`, and before its first: often enough to
+#: show a long call moving, rarely enough to keep a log readable.
+LOG_SECONDS = 5.0
 
 
 def progress_enabled(enable: bool | None = None) -> bool:
     """Whether to draw a bar: ``enable`` if given, else only when stderr is a terminal and
-    ``EXACTGRASP_NO_PROGRESS`` is unset (so logs and CI stay clean)."""
+    ``EXACTGRASP_NO_PROGRESS`` is unset (elsewhere `progress_bar` gives a `ProgressLog`)."""
     if enable is not None:
         return enable
     if os.environ.get("EXACTGRASP_NO_PROGRESS"):
@@ -76,8 +89,81 @@ class ProgressBar(tqdm):
         super().close()
 
 
-def progress_bar(total: int, desc: str = "", enable: bool | None = None) -> ProgressBar:
-    """A `ProgressBar` (a context manager), disabled unless `progress_enabled`."""
+class ProgressLog:
+    """Progress as plain lines (``poses: 1,200/4,266 (28 %), 10 s``), one at most every
+    ``interval`` seconds and none before: a call shorter than that writes nothing; a longer
+    one ends with a line of its total.
+
+    Parameters
+    ----------
+    total : int
+        Items to do.
+    desc : str
+        What they are, at the start of each line.
+    file : file-like, optional
+        Where the lines go (default: stderr at each line).
+    interval : float, optional
+        Seconds between lines (default `LOG_SECONDS`, read when the log is made).
+    clock : callable, optional
+        Seconds now (default `time.monotonic`).
+
+    Shares what the package's callers use of a `ProgressBar`: ``update``, ``close``, ``n``,
+    ``total``, ``disable`` (False) and the context manager.
+    """
+
+    disable = False
+
+    def __init__(
+        self,
+        total: int,
+        desc: str = "",
+        file: IO[str] | None = None,
+        interval: float | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ):
+        self.total, self.desc, self.n = total, desc, 0
+        self.file = file
+        self.interval = LOG_SECONDS if interval is None else interval
+        self.clock = clock
+        self.start = self.last = clock()
+        self.lines = 0
+
+    def update(self, n: int | float = 1) -> None:
+        """Add ``n`` items done; write a line if `interval` has passed since the last."""
+        self.n += n
+        if self.clock() - self.last >= self.interval:
+            self._write()
+
+    def close(self) -> None:
+        """End the log: a last line with the total, if any line was written."""
+        if self.lines:
+            self._write()
+
+    def _write(self) -> None:
+        self.last = now = self.clock()
+        share = f" ({100 * self.n / self.total:.0f} %)" if self.total else ""
+        print(
+            f"{self.desc}: {self.n:,}/{self.total:,}{share}, {now - self.start:.0f} s",
+            file=sys.stderr if self.file is None else self.file,
+            flush=True,
+        )
+        self.lines += 1
+
+    def __enter__(self) -> ProgressLog:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def progress_bar(
+    total: int, desc: str = "", enable: bool | None = None
+) -> ProgressBar | ProgressLog:
+    """A `ProgressBar` (a context manager), disabled unless `progress_enabled`; or, when
+    nobody chose (``enable`` None) and stderr is not a terminal, a `ProgressLog` (unless
+    ``EXACTGRASP_NO_PROGRESS`` is set)."""
+    if enable is None and not progress_enabled() and not os.environ.get("EXACTGRASP_NO_PROGRESS"):
+        return ProgressLog(total, desc)
     return ProgressBar(total=total, desc=desc, disable=not progress_enabled(enable), leave=False)
 
 

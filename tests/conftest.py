@@ -27,6 +27,15 @@ def pytest_sessionfinish():
     shutil.rmtree(TEST_CACHE, ignore_errors=True)
 
 
+@pytest.fixture(autouse=True)
+def _mesh_warnings_heard_afresh():
+    """Each test hears the mesh warnings (`exactgrasp.errors.warn_once`) as a new process
+    would: what earlier tests were told is forgotten."""
+    from exactgrasp.errors import WARNED
+
+    WARNED.clear()
+
+
 #: ``$EXACTGRASP_DATA``, else ``../shared/data`` beside the repository (`data_dir`).
 SHARED_DATA = data_dir()
 

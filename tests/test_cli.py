@@ -645,3 +645,51 @@ def test_compare_of_different_samplers_names_each_file(grasp_file, tmp_path, cap
     argv = ["descriptor", str(grasp_file), "-o", str(c), "--sampler", suggested, *COARSE]
     assert main(argv) == 0
     assert main(["compare", str(a), str(c)]) == 0
+
+
+# -- what the command prints besides its results ---------------------------------------------
+
+#: What the ``exactgrasp`` console script runs.
+CONSOLE_SCRIPT = "import sys\nfrom exactgrasp.cli import main\nsys.exit(main())\n"
+
+
+def console(folder: Path, *args: str, **popen) -> subprocess.Popen:
+    """``exactgrasp ARGS`` run as the console script runs it, this checkout imported."""
+    script = folder / "exactgrasp"
+    script.write_text(CONSOLE_SCRIPT)
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "EXACTGRASP_NO_PROGRESS": "1"}
+    return subprocess.Popen(
+        [sys.executable, str(script), *args], cwd=folder, env=env, text=True, **popen
+    )
+
+
+def test_warnings_print_as_category_and_message_without_a_source_line(tmp_path):
+    from tests.test_shells import overlapping_boxes
+
+    v, f = overlapping_boxes()
+    write_ply(tmp_path / "two.ply", v * 0.1, f)
+    write_ply(tmp_path / "box.ply", *box_arrays([0, 0, 0], [0.01, 0.01, 0.01]))
+    run = console(tmp_path, "overlap", "two.ply", "box.ply", stdout=subprocess.PIPE,
+                  stderr=subprocess.PIPE)  # fmt: skip
+    out, err = run.communicate(timeout=300)
+    assert run.returncode == 0, err
+    assert float(out.split()[1]) == pytest.approx(1e-6, rel=1e-9)
+    assert err.splitlines() == [err.strip()], err  # one line: no source line under it
+    assert err.startswith("MeshWarning: two.ply: 2 shells; merged shells 0 (8 vertices)")
+    assert "exactgrasp:3" not in err and "sys.exit" not in err
+
+
+def test_a_closed_pipe_ends_the_command_quietly_with_141(tmp_path):
+    goldens = ROOT / "tests" / "goldens"
+    a, b = goldens / "builtin_box.exact.npz", goldens / "builtin_box.voxel.npz"
+    # The reader goes before the command writes (`exactgrasp compare ... | head` at its end).
+    run = console(tmp_path, "compare", str(a), str(b), stdout=subprocess.PIPE,
+                  stderr=subprocess.PIPE)  # fmt: skip
+    run.stdout.close()
+    err = run.stderr.read()
+    assert run.wait(timeout=300) == 141
+    assert err == ""
+    # With a reader, the same command prints its matrices and exits 0.
+    done = console(tmp_path, "compare", str(a), str(b), stdout=subprocess.PIPE)
+    assert done.communicate(timeout=300)[0].startswith("l2 distances:")
+    assert done.returncode == 0

@@ -170,6 +170,24 @@ def test_the_docs_example_runs(capsys):
     assert str(steps) in capsys.readouterr().out
 
 
+def test_the_units_example_runs(capsys):
+    # The example of docs/exact-backend.md ("Units: the canonical frame"), run as written.
+    text = (ROOT / "docs" / "exact-backend.md").read_text()
+    block = text.split("<!-- gradient-units-example -->\n```python\n", 1)[1].split("```", 1)[0]
+    scope: dict = {}
+    exec(compile(block, "exact-backend.md", "exec"), scope)
+    grasp, volume, twist = scope["grasp"], scope["volume"], scope["twist"]
+    assert scope["s"] == 25.0
+    # A cap of the ball 5 mm deep, its base a disc of radius sqrt(0.02² - 0.015²) in z = 0.01.
+    assert 0 < volume < np.pi * 0.005**2 * (3 * 0.02 - 0.005) / 3
+    assert volume == pytest.approx(eg.intersection_volume(grasp), rel=1e-12)
+    direct = eg.intersection_gradient(grasp)
+    assert np.allclose(twist, direct, rtol=1e-9, atol=1e-12 * np.abs(direct).max())
+    # Lifting the ball sheds volume at about the cap's base area (a disc of the icosphere).
+    assert -twist[2] == pytest.approx(np.pi * (0.02**2 - 0.015**2), rel=0.1)
+    assert str(volume) in capsys.readouterr().out
+
+
 # -- central differences on real grasps ---------------------------------------------------------
 
 STEPS = (1e-3, 1e-4, 1e-5)

@@ -17,7 +17,15 @@ import trimesh
 
 import exactgrasp as eg
 from exactgrasp.cache import LRUCache
-from exactgrasp.errors import Fix, GraspFileError, JointError, MeshError, ModelError
+from exactgrasp.errors import (
+    WARNED,
+    Fix,
+    GraspFileError,
+    JointError,
+    MeshError,
+    MeshWarning,
+    ModelError,
+)
 from exactgrasp.geometry import solid as solid_module
 from exactgrasp.geometry.intake import UNITS
 from exactgrasp.grasp import FORMAT, files
@@ -220,7 +228,7 @@ def test_surface_samples_are_relative_to_the_grasp_file(tmp_path, monkeypatch):
     assert saved["object_surface_samples"] == "../box_P.ply"
 
 
-def test_an_object_is_read_once_per_file_and_warned_about_at_every_read(tmp_path):
+def test_an_object_is_read_once_per_file_and_warned_about_once(tmp_path):
     # An inside-out box (its triangles reversed), 20 mm a side: read, flipped with a warning.
     vertices, faces = box_arrays([-10, -10, -10], [10, 10, 10])
     trimesh.Trimesh(vertices, faces[:, ::-1], process=False).export(tmp_path / "box.stl")
@@ -234,11 +242,15 @@ def test_an_object_is_read_once_per_file_and_warned_about_at_every_read(tmp_path
         (tmp_path / f"{name}.json").write_text(json.dumps(data))
     builds = OBJECTS.builds
     grasps = []
-    for name in ("a", "b", "a"):
-        with pytest.warns(UserWarning, match="inside-out") as caught:
-            grasps.append(eg.Grasp.from_file(tmp_path / f"{name}.json"))
-        # The warning points at this line, not inside the package.
-        assert any(w.filename == __file__ for w in caught)
+    with pytest.warns(MeshWarning, match="inside-out") as caught:
+        grasps.append(eg.Grasp.from_file(tmp_path / "a.json"))
+    # The warning points at this line, not inside the package.
+    assert any(w.filename == __file__ for w in caught)
+    # The same mesh read again, through another file too: nothing new to say.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        grasps += [eg.Grasp.from_file(tmp_path / f"{name}.json") for name in ("b", "a")]
+    assert not caught
     assert OBJECTS.builds == builds + 1
     assert grasps[0].object is grasps[1].object is grasps[2].object
     assert grasps[0].object.volume == pytest.approx(8e-6, rel=1e-12)
@@ -262,12 +274,16 @@ def test_an_object_is_read_once_per_file_and_warned_about_at_every_read(tmp_path
     trimesh.Trimesh(vertices, faces[:, ::-1], process=False).export(tmp_path / "box.stl")
     data["object_units"] = "m"
     (tmp_path / "d.json").write_text(json.dumps(data))
-    for _ in range(2):
-        with (
-            pytest.warns(UserWarning, match="inside-out"),
-            pytest.raises(GraspFileError, match="too large"),
-        ):
+    with (
+        pytest.warns(MeshWarning, match="inside-out"),
+        pytest.raises(GraspFileError, match="too large"),
+    ):
+        eg.Grasp.from_file(tmp_path / "d.json")
+    with warnings.catch_warnings(record=True) as caught:  # the error again, the warning once
+        warnings.simplefilter("always")
+        with pytest.raises(GraspFileError, match="too large"):
             eg.Grasp.from_file(tmp_path / "d.json")
+    assert not caught
     assert OBJECTS.builds == builds + 5
 
 
@@ -302,14 +318,20 @@ def test_a_resolved_object_is_kept_on_disk_for_every_process(tmp_path, monkeypat
     # As another process: its own memory cache, the same disk cache. The mesh is not read
     # again; the solid, its reports and its warnings are the same.
     monkeypatch.setattr(files, "OBJECTS", LRUCache(32))
+    WARNED.clear()
     with pytest.warns(UserWarning, match="2 shells") as again:
         kept = eg.Grasp.from_file(tmp_path / "a.json").object
     assert len(reads) == 1
     assert [str(w.message) for w in again] == [str(w.message) for w in given]
-    # Kept in memory now, and still warned about, at this line.
-    with pytest.warns(UserWarning, match="2 shells") as third:
+    # Kept in memory now, and already said in this process; said again, at this line.
+    with warnings.catch_warnings(record=True) as third:
+        warnings.simplefilter("always")
         assert eg.Grasp.from_file(tmp_path / "a.json").object is kept
-    assert [(w.filename, str(w.message)) for w in third] == [
+    assert not third
+    WARNED.clear()
+    with pytest.warns(UserWarning, match="2 shells") as fourth:
+        assert eg.Grasp.from_file(tmp_path / "a.json").object is kept
+    assert [(w.filename, str(w.message)) for w in fourth] == [
         (__file__, str(w.message)) for w in given
     ]
     assert kept.volume == read.volume  # a cached property of `read` already
@@ -333,11 +355,14 @@ def test_a_resolved_object_is_kept_on_disk_for_every_process(tmp_path, monkeypat
     assert run.returncode == 0, run.stderr
     assert float(run.stdout) == read.volume
 
-    # Surface samples given as an array: not kept, read again and warned about each time.
+    # Surface samples given as an array: not kept, read again each time (the warning, the
+    # same mesh's, already said in this process).
     points = np.array([[0.0, 0.0, 10.0], [15.0, 0.0, 10.0]])
     for expected_reads in (2, 3):
-        with pytest.warns(UserWarning, match="2 shells"):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
             grasp = eg.Grasp.from_file(tmp_path / "a.json", surface_samples=points)
+        assert not caught
         assert len(reads) == expected_reads
         assert grasp.object.volume == pytest.approx(1.2e-5, rel=1e-12)
 

@@ -13,7 +13,13 @@ from pathlib import Path
 from numba.core import event
 
 from exactgrasp import progress
-from exactgrasp.progress import COMPILE_SECONDS, ProgressBar, compile_seconds, progress_bar
+from exactgrasp.progress import (
+    COMPILE_SECONDS,
+    ProgressBar,
+    ProgressLog,
+    compile_seconds,
+    progress_bar,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -112,3 +118,47 @@ def test_the_clock_keeps_ticking_and_the_time_is_counted_while_compiling():
     assert "1" in clocks, text  # drawn at 00:01, with no update of the bar
     assert text.count("\r") >= 1.3 / progress.TICK_SECONDS
     assert 1.3 <= compile_seconds() - before < 2.5
+
+
+# -- plain lines where stderr is not a terminal --------------------------------------------------
+
+
+def test_a_long_call_logs_a_line_every_interval_and_its_total():
+    sink, clock = io.StringIO(), _Clock()
+    assert progress.LOG_SECONDS == 5.0  # docs/cli.md says so
+    with ProgressLog(4266, "exact poses", file=sink, clock=clock) as log:
+        for step in range(12):  # 12 updates, 1 s apart: lines at 5 s and 10 s
+            clock.now += 1.0
+            log.update(100)
+            if step == 3:
+                assert sink.getvalue() == ""  # 4 s in: nothing yet
+    assert sink.getvalue().splitlines() == [
+        "exact poses: 500/4,266 (12 %), 5 s",
+        "exact poses: 1,000/4,266 (23 %), 10 s",
+        "exact poses: 1,200/4,266 (28 %), 12 s",  # the total, at the end
+    ]
+
+
+def test_a_short_call_logs_nothing():
+    sink, clock = io.StringIO(), _Clock()
+    with ProgressLog(100, "poses", file=sink, interval=5.0, clock=clock) as log:
+        for _ in range(10):
+            clock.now += 0.49
+            log.update(10)
+    assert sink.getvalue() == ""
+
+
+def test_progress_bar_logs_when_stderr_is_not_a_terminal(monkeypatch):
+    stderr = io.StringIO()  # isatty() is False
+    monkeypatch.setattr(sys, "stderr", stderr)
+    monkeypatch.delenv("EXACTGRASP_NO_PROGRESS")
+    monkeypatch.setattr(progress, "LOG_SECONDS", 0.0)  # every update is "long"
+    with progress_bar(3, "grasps") as log:
+        assert isinstance(log, ProgressLog) and not log.disable
+        log.update(1)
+    assert stderr.getvalue().splitlines()[0].startswith("grasps: 1/3 (33 %), ")
+    # Chosen: no bar and no line; a bar; or nothing at all where EXACTGRASP_NO_PROGRESS is set.
+    assert progress_bar(3, "grasps", False).disable
+    assert isinstance(progress_bar(3, "grasps", True), ProgressBar)
+    monkeypatch.setenv("EXACTGRASP_NO_PROGRESS", "1")
+    assert progress_bar(3, "grasps").disable

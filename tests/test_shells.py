@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import warnings
 
 import manifold3d as m3
@@ -9,7 +10,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from exactgrasp import MeshError, Solid
+import exactgrasp as eg
+from exactgrasp import MeshError, MeshWarning, Solid
+from exactgrasp.errors import WARNED
 from exactgrasp.geometry.shells import find_crossings, resolve_shells, split_shells
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.hand import Hand
@@ -74,6 +77,41 @@ def test_overlapping_boxes_in_one_object_are_merged():
 def _arrays(solid):
     mesh = solid.to_mesh64()
     return np.asarray(mesh.vert_properties)[:, :3], np.asarray(mesh.tri_verts, dtype=np.int64)
+
+
+def mesh_warnings(fn) -> list[str]:
+    """The `MeshWarning` s that ``fn`` gives, under a filter that shows every warning."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fn()
+    return [str(w.message) for w in caught if issubclass(w.category, MeshWarning)]
+
+
+def test_a_mesh_is_warned_about_once_per_process():
+    v, f = overlapping_boxes()
+
+    def load_and_call():
+        for _ in range(3):
+            eg.intersection_volume(Solid(v, f, name="twice"), (v, f))  # b: the same mesh again
+        Solid(v, f, name="twice")  # from another line
+
+    messages = mesh_warnings(load_and_call)
+    assert [m.split(";")[0] for m in messages] == ["twice: 2 shells", "b: 2 shells"]
+    assert mesh_warnings(load_and_call) == []
+    # Another mesh is another problem; forgetting what was said says it again.
+    assert len(mesh_warnings(lambda: Solid(v, f, name="another"))) == 1
+    WARNED.clear()
+    assert len(mesh_warnings(lambda: Solid(v, f, name="twice"))) == 1
+
+
+def test_a_grasp_files_object_is_warned_about_once_per_process(tmp_path):
+    v, f = overlapping_boxes()
+    trimesh.Trimesh(v * 0.1, f, process=False).export(tmp_path / "two-boxes.stl")
+    data = {"object": "two-boxes.stl", "object_pose_in_hand": np.eye(4).tolist(),
+            "hand": {"type": "builtin", "name": "parallel_gripper"}}  # fmt: skip
+    (tmp_path / "g.json").write_text(json.dumps(data))
+    messages = mesh_warnings(lambda: [eg.Grasp.from_file(tmp_path / "g.json") for _ in range(3)])
+    assert len(messages) == 1 and "two-boxes.stl: 2 shells; merged shells 0" in messages[0]
 
 
 def test_hand_link_of_two_overlapping_shells():
@@ -340,3 +378,12 @@ def test_repair_does_not_touch_a_closed_shell_that_crosses_itself():
         MeshError, match=r"^folded\.stl: the surface .* crosses itself in 4 .*modeller"
     ):
         Solid(v, f, name="folded.stl", repair=True)
+
+
+def test_a_mesh_warning_turned_into_an_error_is_raised_every_time():
+    v, f = overlapping_boxes()
+    for _ in range(2):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", MeshWarning)
+            with pytest.raises(MeshWarning, match=r"^strict: 2 shells; merged shells"):
+                Solid(v, f, name="strict")

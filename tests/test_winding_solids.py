@@ -287,6 +287,7 @@ def test_model_error_names_open_link(tmp_path):
 
 
 def test_resolved_links_are_read_back_from_the_disk_cache(messy_hand_file, monkeypatch, tmp_path):
+    from exactgrasp.errors import WARNED
     from exactgrasp.hands import geoms, loading
 
     monkeypatch.setenv("EXACTGRASP_CACHE", str(tmp_path / "cache"))
@@ -296,6 +297,7 @@ def test_resolved_links_are_read_back_from_the_disk_cache(messy_hand_file, monke
     loaded = []
     for _ in range(2):
         loading._MODELS.clear()  # the in-memory model cache would hide the disk cache
+        WARNED.clear()  # and, as in a new process, nothing said yet
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             hand = eg.Hand.from_mjcf(messy_hand_file, frame=eg.HandFrame.identity())

@@ -190,7 +190,8 @@ def run_batch(
         Address of a running dask scheduler (``tcp://host:8786``); its workers must be able
         to import exactgrasp and read the grasp files.
     progress : bool, optional
-        Progress bar; default only on a terminal.
+        Progress bar (True) or nothing (False); default: a bar on a terminal, else a plain
+        line at most every 5 s of a long run (`exactgrasp.progress.ProgressLog`).
     part_size : int
         Manifest rows per part (an output file, the unit of resuming); the work is cut into
         tasks sized from the rows left and the workers (`task_chunks`).

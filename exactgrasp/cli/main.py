@@ -4,13 +4,16 @@ Each sub-command is one module of `exactgrasp.cli` with ``add_parser(subparsers)
 adds its sub-parser and sets ``func`` (the handler: parsed arguments in, exit status out).
 Adding a command is a new module plus one entry in `COMMANDS`, whose order is the order of
 ``exactgrasp --help``. Handlers raise `ExactGraspError` for bad input; `main` turns it into
-a message and exit status 2 (`exactgrasp.errors.run_reporting_errors`).
+a message and exit status 2 (`exactgrasp.errors.run_reporting_errors`, which also ends a
+command whose reader has gone, ``| head``, quietly with status 141). Python warnings print as
+``Category: message`` (`show_warning`), without the line of code they are attributed to.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
 
 from exactgrasp.cli import (
@@ -30,7 +33,7 @@ from exactgrasp.diagnostics import ignores_third_party_warnings
 from exactgrasp.errors import run_reporting_errors
 from exactgrasp.version import __version__
 
-__all__ = ["COMMANDS", "build_parser", "main"]
+__all__ = ["COMMANDS", "build_parser", "main", "show_warning"]
 
 #: The sub-command modules, in the order ``exactgrasp --help`` lists them.
 COMMANDS = (
@@ -64,12 +67,24 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as the command prints it: ``Category: message``. The line of code it is
+    attributed to (the console script's own, for exactgrasp's warnings) means nothing to
+    someone at a shell. Signature of `warnings.showwarning`."""
+    print(f"{category.__name__}: {message}", file=sys.stderr if file is None else file)
+
+
 @ignores_third_party_warnings
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``exactgrasp`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    return run_reporting_errors(args.func, args, prog=f"exactgrasp {args.command}")
+    shown = warnings.showwarning
+    warnings.showwarning = show_warning
+    try:
+        return run_reporting_errors(args.func, args, prog=f"exactgrasp {args.command}")
+    finally:
+        warnings.showwarning = shown
 
 
 if __name__ == "__main__":

@@ -33,7 +33,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from exactgrasp.errors import MeshError, warn_caller
+from exactgrasp.errors import MeshError, warn_once
 from exactgrasp.geometry.crossings import CROSS, UNSURE, find_crossings
 from exactgrasp.geometry.manifold import to_manifold
 from exactgrasp.geometry.topology import compact, join_meshes, split_shells
@@ -385,7 +385,7 @@ def _warn_resolved(name: str, n_shells: int, report: dict[str, Any], warn) -> No
     # A mesh that was untangled or cut first is named by what was done to it, since its
     # shells are those of the result.
     shells = "" if report["untangled"] else f"{n_shells} shells; "
-    (warn or warn_caller)(
+    (warn or warn_once)(
         f"{name}: {shells}" + "; ".join(report["actions"]) + f". Volume "
         f"{report['volume_before']:.6g} -> {report['volume_after']:.6g} m^3 (the solid is the "
         "set of points of winding number >= 1)."

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import warnings
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -17,7 +16,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from exactgrasp.errors import Fix, MeshError
+from exactgrasp.errors import Fix, MeshError, warn_once
 from exactgrasp.geometry.intake import (
     MAX_PLAUSIBLE_SIZE_M,
     ORIENTATIONS,
@@ -243,10 +242,9 @@ class Solid:
                 "reverse the triangle winding, or pass orientation='flip' to let exactgrasp "
                 "do it."
             )
-        warnings.warn(
+        warn_once(
             f"{self.name}: the mesh is inside-out (signed volume {volume:.6g} m^3); "
-            "its triangles were flipped.",
-            stacklevel=3,
+            "its triangles were flipped."
         )
         return trimesh.Trimesh(mesh.vertices, mesh.faces[:, ::-1], process=False)
 
@@ -299,10 +297,9 @@ class Solid:
                 "volume_after": volume_after,
                 "actions": actions,
             }
-            warnings.warn(
+            warn_once(
                 f"{self.name}: repaired ({', '.join(actions)}); volume {volume_before:.6g} -> "
-                f"{volume_after:.6g} m^3 (the 'before' value of an open mesh is only nominal).",
-                stacklevel=3,
+                f"{volume_after:.6g} m^3 (the 'before' value of an open mesh is only nominal)."
             )
         return mesh
 

@@ -30,7 +30,8 @@ from exactgrasp.errors import (
     MeshError,
     ModelError,
     outside_caller,
-    warn_caller,
+    recording_warnings,
+    warn_once,
     warned_here,
 )
 from exactgrasp.geometry.files import relative_path, resolve_path, write_ply
@@ -196,7 +197,7 @@ def _read_solid(path: Path, units: str, repair: bool, samples: Any) -> Solid:
 
     solid, notes = OBJECTS.get(key, build)
     for note in notes:
-        warn_caller(note)
+        warn_once(note)
     return solid
 
 
@@ -219,13 +220,12 @@ def _read_recording_warnings(
     caught: list[warnings.WarningMessage] = []
     site = outside_caller()
     try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
+        with recording_warnings() as caught:
             solid = Solid.from_file(path, units=units, repair=repair, surface_samples=samples)
     except Exception:
         for w in caught:
             if warned_here(w, site):
-                warn_caller(str(w.message))
+                warn_once(str(w.message))
             else:
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         raise

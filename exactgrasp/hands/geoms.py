@@ -6,8 +6,6 @@ With ``repair=True`` a mesh geom that is not a closed solid is repaired as
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
@@ -15,7 +13,7 @@ from scipy.spatial import cKDTree
 
 from exactgrasp.cache import DiskCache
 from exactgrasp.compiling import code_digest
-from exactgrasp.errors import Fix, MeshError, ModelError, warn_caller
+from exactgrasp.errors import Fix, MeshError, ModelError, recording_warnings, warn_once
 from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
 from exactgrasp.geometry.solid import Solid
@@ -116,8 +114,7 @@ def weld_mesh(
 
     def build():
         notes: dict[str, list[str]] = {"repairs": [], "resolved": [], "warnings": []}
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
+        with recording_warnings() as caught:
             W, G = _weld(
                 V,
                 F,
@@ -134,7 +131,7 @@ def weld_mesh(
     if resolved is not None:
         resolved.extend(notes["resolved"])
     for message in notes["warnings"]:
-        warn_caller(message)
+        warn_once(message)
     return arrays["vertices"], arrays["faces"]
 
 
@@ -172,13 +169,13 @@ def _weld(V, F, what, repairs, resolved):
             F,
             what,
             orientation="flip",
-            warn=warn_caller if resolved is None else resolved.append,
+            warn=warn_once if resolved is None else resolved.append,
         )
     except MeshError as exc:
         raise ModelError(*exc.parts) from exc
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     if np.einsum("ij,ij->", a, np.cross(b, c)) < 0:
-        warn_caller(f"{what} is inside-out (negative volume); its faces were flipped")
+        warn_once(f"{what} is inside-out (negative volume); its faces were flipped")
         F = F[:, ::-1].copy()
     return V, F
 
@@ -211,15 +208,14 @@ def repair_mesh(
     (numpy.ndarray (n', 3) float64, numpy.ndarray (m', 3) int64)
         The repaired closed mesh, its shells resolved as for any solid.
     """
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    with recording_warnings() as caught:
         try:
             solid = Solid(V, F, name=what, repair=True, check_scale=False)
         except MeshError as exc:
             raise ModelError(*exc.parts, " (with ", Fix("repair", True), ")") from exc
     for w in caught:  # the repair itself is reported once, below; shell notes pass on
         if not str(w.message).startswith(f"{what}: repaired"):
-            (warn_caller if resolved is None else resolved.append)(str(w.message))
+            (warn_once if resolved is None else resolved.append)(str(w.message))
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     before = float(np.einsum("ij,ij->", a, np.cross(b, c))) / 6.0
     actions = list((solid.repair_report or {}).get("actions", []))
@@ -330,12 +326,12 @@ def collect_geoms(
             if welded[key] is not None:
                 geoms.append((name, g, *welded[key]))
     if resolved:
-        warn_caller(
+        warn_once(
             f"{source}: resolved mesh geoms into the solids they bound: "
             + " | ".join(line.removeprefix(f"{source}: ") for line in resolved)
         )
     if repairs:
-        warn_caller(
+        warn_once(
             f"{source}: repaired {len(repairs)} mesh geom(s) (repair=True): "
             + "; ".join(line.removeprefix(f"{source}: ") for line in repairs)
             + " (the 'before' volume of an open mesh is only nominal)"
@@ -366,7 +362,7 @@ def _kept_geoms(m, in_tree, root: int, body_names, geometry: str, source: str) -
     if not_solid:  # planes are infinite; height fields and SDFs are terrain or implicit
         notes.append(f"not closed solids: {', '.join(not_solid)}")
     if notes:
-        warn_caller(f"{source}: geoms left out of the hand: " + "; ".join(notes))
+        warn_once(f"{source}: geoms left out of the hand: " + "; ".join(notes))
     if not kept:
         if other:
             hint: tuple = (

@@ -7,7 +7,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from exactgrasp.errors import ModelError, warn_caller
+from exactgrasp.errors import ModelError, warn_once
 from exactgrasp.hands.geoms import JOINT_HINGE, JOINT_SLIDE
 from exactgrasp.hands.tendons import soft_tendons, tendon_couplings
 
@@ -59,7 +59,7 @@ def _model_couplings(m, source: str) -> dict[str, tuple[str | None, float, float
             continue
         dep, drv, coef = int(m.eq_obj1id[e]), int(m.eq_obj2id[e]), m.eq_data[e][:5]
         if np.any(coef[2:] != 0):
-            warn_caller(
+            warn_once(
                 f"{source}: non-linear joint equality on "
                 f"{m.joint(dep).name} ignored (joint left independent)"
             )
@@ -106,7 +106,7 @@ def collect_joints(mj_model, in_tree: np.ndarray, root: int, couplings, source: 
             continue
         (hinge_slide if m.jnt_type[j] in (JOINT_HINGE, JOINT_SLIDE) else held).append(j)
     if held:
-        warn_caller(
+        warn_once(
             f"{source}: free/ball joints {[m.joint(j).name for j in held]} "
             "are held at their initial pose (only hinge and slide joints are "
             "exposed)"

@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from exactgrasp.errors import Fix, ModelError, warn_caller
+from exactgrasp.errors import Fix, ModelError, warn_once
 from exactgrasp.hands.geoms import (
     GEOM_HFIELD,
     GEOM_KIND,
@@ -164,7 +164,7 @@ def hand_subtree(
         if loose:
             top = np.asarray(m.body_rootid)
             in_tree &= ~np.isin(top, loose)
-            warn_caller(
+            warn_once(
                 f"{source}: bodies with a free joint are loose objects, not hand links; left "
                 f"out: {', '.join(names[b] for b in loose)}"
             )

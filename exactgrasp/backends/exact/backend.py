@@ -132,8 +132,10 @@ class ExactBackend(Backend):
         -------
         VolumeGradients
             ``volumes`` (n,), ``twist`` (n, 6), ``joints`` (n, k) and ``joint_names`` (k);
-            a single (4, 4) pose counts as n = 1. See `VolumeGradients` for the conventions
-            and ``docs/exact-backend.md`` ("Derivatives").
+            a single (4, 4) pose counts as n = 1, all in the canonical frame's units (one
+            unit is ``1 / grasp.frame.scale`` metres). See `VolumeGradients` for the
+            conventions and ``docs/exact-backend.md`` ("Derivatives", "Units: the canonical
+            frame", for the same in metres).
         """
         arr = check_poses(poses)
         flat = arr.reshape(-1, 4, 4)
