@@ -3,16 +3,21 @@
 Comparison (default): for each of the 34 contact-adjusted cereal-box grasps
 (``barrett-grasps/grasps/obj5_*.json``, "theirs") the raw record it was adjusted from
 (``study-records/CerealBox/<name less _target/_prime>.json``) is separated with
-``separate(raw, fingers=...)`` ("ours"). Per grasp: whether ours is in contact, the object-pose
-difference ours-theirs and raw-theirs (the object's centroid, mm; the relative rotation,
-degrees), the largest joint difference (rad), and the descriptor L2 distance (library
-defaults: the default sampler and backend) ours-theirs against raw-theirs.
+``separate(raw)``, the library's defaults (``--fingers default``), or with
+``separate(raw, fingers=...)`` ("ours"). Per grasp: what was done with the fingers (and, for
+``"auto"``, the links found buried), whether ours is in contact, the object-pose difference
+ours-theirs and raw-theirs (the object's centroid, mm; the relative rotation, degrees), the
+largest joint difference (rad), and the descriptor L2 distance (library defaults: the default
+sampler and backend) ours-theirs against raw-theirs. The last line counts the records
+separated, in contact, and closer to theirs than the raw record (of all 34: a refused record
+counts as not closer). ``--limit N`` and ``--grasps STEM ...`` take a subset.
 
 Batch (``--batch``): ``separate`` over every raw record of ``study-records/index.csv`` (or
 every N-th, ``--every N``); its success rate (separated and in contact) and seconds per
 record, written as it goes. FoodClip's open mesh is repaired on loading.
 
-    python benchmarks/separate_authors.py [--fingers reclose] [--no-rotation] [--json out.json]
+    python benchmarks/separate_authors.py [--fingers default|auto|keep|reclose] [--no-rotation]
+        [--limit N] [--grasps STEM ...] [--json out.json]
     python benchmarks/separate_authors.py --batch [--every N] [--limit N] [--json out.json]
 
 Needs the shared data folder; skips with a message when it is absent.
@@ -62,55 +67,94 @@ def joint_difference(a, b) -> float:
     return max(abs(a.hand.joints[n] - b.hand.joints[n]) for n in a.hand.joint_names)
 
 
-def compare(data: Path, fingers: str, rotation: bool, out: Path | None) -> None:
-    import numpy as np
+def adjusted_paths(data: Path, limit: int | None = None, grasps=None) -> list[Path]:
+    """The contact-adjusted cereal-box grasps in file-name order: the first ``limit``, or
+    those whose stem (with or without ``_target`` / ``_prime``) is in ``grasps``."""
+    paths = sorted((data / GRASPS).glob("obj5_*.json"))
+    if grasps:
+        paths = [p for p in paths if p.stem in grasps or raw_name(p.stem) in grasps]
+    return paths[:limit]
 
+
+def compare_one(path: Path, data: Path, fingers: str, rotation: bool) -> dict:
+    """One adjusted grasp's row: its raw record separated (``fingers="default"``: with the
+    library's defaults) and compared with it and with the raw record."""
     import exactgrasp as eg
 
+    theirs = eg.Grasp.from_file(path)
+    raw = eg.Grasp.from_file(data / RAW / "CerealBox" / f"{raw_name(path.stem)}.json")
+    options = {} if fingers == "default" else {"fingers": fingers}
+    t0 = time.perf_counter()
+    try:
+        result = eg.separate(raw, rotation=rotation, **options)
+    except eg.SeparationError as exc:
+        return {"grasp": path.stem, "error": str(exc)}
+    seconds = time.perf_counter() - t0
+    ours = result.grasp
+    d_raw, d_ours, d_theirs = (eg.compute_descriptor(g) for g in (raw, ours, theirs))
+    return {
+        "grasp": path.stem,
+        "seconds": seconds,
+        "fingers": result.fingers,
+        "buried_links": result.buried_links,
+        "in_contact": result.in_contact,
+        "moved_mm": result.translation_mm,
+        "turned_deg": result.rotation_deg,
+        "ours_theirs_pose": pose_difference(ours, theirs),
+        "raw_theirs_pose": pose_difference(raw, theirs),
+        "ours_theirs_joint_rad": joint_difference(ours, theirs),
+        "raw_theirs_joint_rad": joint_difference(raw, theirs),
+        "ours_theirs_l2": eg.distance(d_ours, d_theirs),
+        "raw_theirs_l2": eg.distance(d_raw, d_theirs),
+    }
+
+
+def counts(rows: list[dict]) -> dict[str, int]:
+    """Records compared, separated, in contact, and closer to theirs than the raw record
+    (descriptor L2; a refused record is not closer); re-closed by the fingers' mode."""
+    done = [r for r in rows if "error" not in r]
+    return {
+        "records": len(rows),
+        "separated": len(done),
+        "in_contact": sum(bool(r["in_contact"]) for r in done),
+        "closer": sum(r["ours_theirs_l2"] < r["raw_theirs_l2"] for r in done),
+        "reclosed": sum(r["fingers"] == "reclose" for r in done),
+    }
+
+
+def compare(
+    data: Path, fingers: str, rotation: bool, out: Path | None, limit=None, grasps=None
+) -> None:
+    import numpy as np
+
     rows = []
-    for path in sorted((data / GRASPS).glob("obj5_*.json")):
-        theirs = eg.Grasp.from_file(path)
-        raw = eg.Grasp.from_file(data / RAW / "CerealBox" / f"{raw_name(path.stem)}.json")
-        t0 = time.perf_counter()
-        try:
-            result = eg.separate(raw, fingers=fingers, rotation=rotation)
-        except eg.SeparationError as exc:
-            rows.append({"grasp": path.stem, "error": str(exc)})
-            print(f"{path.stem}: refused: {exc}")
-            continue
-        seconds = time.perf_counter() - t0
-        ours = result.grasp
-        d_raw, d_ours, d_theirs = (eg.compute_descriptor(g) for g in (raw, ours, theirs))
-        row = {
-            "grasp": path.stem,
-            "seconds": seconds,
-            "in_contact": result.in_contact,
-            "moved_mm": result.translation_mm,
-            "turned_deg": result.rotation_deg,
-            "ours_theirs_pose": pose_difference(ours, theirs),
-            "raw_theirs_pose": pose_difference(raw, theirs),
-            "ours_theirs_joint_rad": joint_difference(ours, theirs),
-            "raw_theirs_joint_rad": joint_difference(raw, theirs),
-            "ours_theirs_l2": eg.distance(d_ours, d_theirs),
-            "raw_theirs_l2": eg.distance(d_raw, d_theirs),
-        }
+    for path in adjusted_paths(data, limit, grasps):
+        row = compare_one(path, data, fingers, rotation)
         rows.append(row)
+        if "error" in row:
+            print(f"{path.stem}: refused: {row['error']}")
+            continue
         print(
-            f"{path.stem:40s} contact={row['in_contact']} moved {row['moved_mm']:.2f} mm "
-            f"{row['turned_deg']:.2f} deg; pose vs theirs {row['ours_theirs_pose'][0]:.2f} mm "
-            f"{row['ours_theirs_pose'][1]:.2f} deg (raw {row['raw_theirs_pose'][0]:.2f} mm "
+            f"{path.stem:40s} {row['fingers']} contact={row['in_contact']} moved "
+            f"{row['moved_mm']:.2f} mm {row['turned_deg']:.2f} deg; pose vs theirs "
+            f"{row['ours_theirs_pose'][0]:.2f} mm {row['ours_theirs_pose'][1]:.2f} deg "
+            f"(raw {row['raw_theirs_pose'][0]:.2f} mm "
             f"{row['raw_theirs_pose'][1]:.2f} deg); joints {row['ours_theirs_joint_rad']:.3f} "
             f"(raw {row['raw_theirs_joint_rad']:.3f}) rad; L2 {row['ours_theirs_l2']:.4f} "
-            f"(raw {row['raw_theirs_l2']:.4f}); {seconds:.1f} s",
+            f"(raw {row['raw_theirs_l2']:.4f}); {row['seconds']:.1f} s",
             flush=True,
         )
         if out:
             out.write_text(json.dumps(rows, indent=1))
+    if out:
+        out.write_text(json.dumps(rows, indent=1))
     done = [r for r in rows if "error" not in r]
-    closer = [r["ours_theirs_l2"] < r["raw_theirs_l2"] for r in done]
+    n = counts(rows)
     print(
-        f"{len(done)} of {len(rows)} separated, {sum(r['in_contact'] for r in done)} in contact; "
-        f"ours closer to theirs (descriptor L2) in {sum(closer)} of {len(done)}; mean L2 "
+        f"fingers={fingers}: {n['separated']} of {n['records']} separated "
+        f"({n['reclosed']} with the fingers re-closed), {n['in_contact']} in contact; ours "
+        f"closer to theirs (descriptor L2) than the raw record in {n['closer']} of "
+        f"{n['records']}; mean L2 "
         f"ours {np.mean([r['ours_theirs_l2'] for r in done]):.4f}, raw "
         f"{np.mean([r['raw_theirs_l2'] for r in done]):.4f}; median pose difference ours "
         f"{np.median([r['ours_theirs_pose'][0] for r in done]):.2f} mm "
@@ -140,8 +184,13 @@ def batch(data: Path, fingers: str, limit: int | None, every: int, out: Path | N
             grasp = eg.Grasp.from_file(
                 data / RAW / obj / f"{record}.json", repair=obj == "FoodClip"
             )
-            result = eg.separate(grasp, fingers=fingers)
-            row.update(in_contact=result.in_contact, moved_mm=result.translation_mm)
+            options = {} if fingers == "default" else {"fingers": fingers}
+            result = eg.separate(grasp, **options)
+            row.update(
+                in_contact=result.in_contact,
+                moved_mm=result.translation_mm,
+                fingers=result.fingers,
+            )
         except eg.ExactGraspError as exc:
             row["error"] = f"{type(exc).__name__}: {exc}"
         row["seconds"] = time.perf_counter() - t0
@@ -159,7 +208,13 @@ def batch(data: Path, fingers: str, limit: int | None, every: int, out: Path | N
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fingers", default="reclose", choices=("keep", "reclose"))
+    ap.add_argument(
+        "--fingers",
+        default="default",
+        choices=("default", "auto", "keep", "reclose"),
+        help="default: separate(raw) with the library's defaults",
+    )
+    ap.add_argument("--grasps", nargs="+", help="comparison: these stems only")
     ap.add_argument("--batch", action="store_true")
     ap.add_argument(
         "--rotation", action=argparse.BooleanOptionalAction, default=True, help="comparison"
@@ -174,7 +229,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.batch:
         batch(data, args.fingers, args.limit, args.every, args.json)
     else:
-        compare(data, args.fingers, args.rotation, args.json)
+        compare(data, args.fingers, args.rotation, args.json, args.limit, args.grasps)
     return 0
 
 

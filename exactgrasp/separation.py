@@ -6,13 +6,15 @@ of the object changes the volume to first order; a Newton step to zero along it,
 smallest motion (in that metric) that the linear model says removes the volume. Steps repeat
 from where they land until the volume reads exactly 0; the last one, which crosses into
 contact, is bisected on the exact volume until the object sits within ``tolerance_mm`` of the
-hand along it. Optionally the fingers open first and close again after (`close_fingers`), for
-grasps whose fingers are buried in the object. Nothing is random: the same grasp gives the
-same result. See ``docs/penetration-volume.md``.
+hand along it. Where the fingers are buried in the object (`buried_links`; the default
+``fingers="auto"`` decides so, or ``fingers="reclose"`` asks for it), the fingers open first and
+close again after (`close_fingers`). Nothing is random: the same grasp gives the same result.
+See ``docs/penetration-volume.md``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -21,12 +23,21 @@ import numpy as np
 
 from exactgrasp.backends.exact import ExactBackend
 from exactgrasp.backends.registry import as_backend
-from exactgrasp.errors import SeparationError
+from exactgrasp.errors import ClosingError, SeparationError
 from exactgrasp.geometry.se3 import exp_se3
 from exactgrasp.grasp.closing import close_fingers_result, closing_directions
 from exactgrasp.grasp.grasp import Grasp
 
-__all__ = ["PUSH_MM", "ROTATION_SCALE", "Separation", "in_contact", "separate"]
+__all__ = [
+    "BURIED_FRACTION",
+    "FINGERS",
+    "PUSH_MM",
+    "ROTATION_SCALE",
+    "Separation",
+    "buried_links",
+    "in_contact",
+    "separate",
+]
 
 #: A radian of rotation weighs as much as this many canonical units of translation (1: the
 #: palm-to-centre half-depth, so a radian moves a point at the grasp's centre about as far).
@@ -38,6 +49,14 @@ PUSH_MM = 1.0
 MAX_STEP = 0.25
 #: Samples per round of the bisection of the last step.
 BRACKET = 16
+#: What `separate` does with the fingers.
+FINGERS = ("auto", "keep", "reclose")
+#: A finger link is buried when more than this fraction of its own volume lies inside the
+#: object (`buried_links`): far above a finger stopped at the surface (none inside) and far
+#: below a finger closed through it (the measurements: ``docs/penetration-volume.md``).
+BURIED_FRACTION = 1e-3
+#: What a refusal with the joints kept suggests.
+RECLOSE_HINT = "fingers='reclose' (--fingers reclose on the command line)"
 
 
 @dataclass(frozen=True)
@@ -65,6 +84,12 @@ class Separation:
     direction : numpy.ndarray, shape (6,)
         The separating direction: the last step's unit twist (canonical frame, ``(v, ω)``),
         or, where no step was needed, the one down the input grasp's volume gradient.
+    fingers : {"keep", "reclose"}
+        What was done with the fingers (``fingers="auto"`` resolved).
+    buried_links : tuple of str or None
+        With ``fingers="auto"``, the finger links found buried (`buried_links`); None where
+        nothing was measured (the mode was given, or the hand's closing joints cannot be
+        told).
     """
 
     grasp: Grasp
@@ -76,6 +101,8 @@ class Separation:
     in_contact: bool
     steps: int
     direction: np.ndarray = field(repr=False)
+    fingers: str = "keep"
+    buried_links: tuple[str, ...] | None = None
 
 
 def _metric(rotation: bool) -> np.ndarray:
@@ -142,10 +169,64 @@ def _opened(grasp: Grasp):
     )
 
 
+def buried_links(grasp: Grasp, backend: str | ExactBackend = "exact") -> tuple[str, ...]:
+    """The finger links buried in the object: those the closing joints move (the links that
+    opening them to their limits moves) with more than `BURIED_FRACTION` of their own volume
+    inside the object, by the exact volume of each link alone against the object.
+
+    Parameters
+    ----------
+    grasp : Grasp
+    backend : "exact" or ExactBackend
+        As for `separate`.
+
+    Returns
+    -------
+    tuple of str
+        Link names, in the hand's link order; empty for a hand without joints.
+
+    Raises
+    ------
+    ClosingError
+        The hand's closing joints cannot be told (no palm frame and no closing joints set on
+        its model).
+    """
+    backend = _exact_backend(backend)
+    if not grasp.hand.joint_names:
+        return ()
+    hand, opened = grasp.hand, _opened(grasp)
+    bodies = grasp.canonical_object_bodies()
+    found = []
+    for name, link, (v, _), (w, _) in zip(
+        hand.link_names, hand.canonical_links(), hand.link_arrays(), opened.link_arrays(),
+        strict=True,
+    ):  # fmt: skip
+        if np.array_equal(v, w):
+            continue  # not a finger link: opening the closing joints leaves it where it is
+        intersector = backend.intersector_of([link], bodies)
+        inside = float(intersector.volumes(np.eye(4)[None])[0])
+        if inside > BURIED_FRACTION * intersector.hand_volume:
+            found.append(name)
+    return tuple(found)
+
+
+def _resolve_fingers(grasp, fingers, backend) -> tuple[str, tuple[str, ...] | None]:
+    """``fingers`` as "keep" or "reclose", with the buried links ``"auto"`` found (None where
+    it measured nothing: a mode given, or a hand whose closing joints cannot be told, whose
+    joints ``"auto"`` keeps)."""
+    if fingers != "auto":
+        return fingers, None
+    try:
+        buried = buried_links(grasp, backend)
+    except ClosingError:
+        return "keep", None
+    return ("reclose" if buried else "keep"), buried
+
+
 def separate(
     grasp: Grasp,
     *,
-    fingers: str = "keep",
+    fingers: str = "auto",
     rotation: bool = True,
     tolerance_mm: float = 0.01,
     max_steps: int = 60,
@@ -157,10 +238,17 @@ def separate(
     Parameters
     ----------
     grasp : Grasp
-    fingers : {"keep", "reclose"}
+    fingers : {"auto", "keep", "reclose"}
         ``"keep"``: the joints stay. ``"reclose"``: the closing joints open to their limits
         first, the object is moved out of the open hand, and the fingers close onto it again
         (`close_fingers`, no back-off); for grasps whose fingers are buried in the object.
+        ``"auto"`` (default): ``"reclose"`` where a finger link is buried (more than
+        `BURIED_FRACTION`, a thousandth, of its own volume inside the object:
+        `buried_links`), else ``"keep"``, and ``"reclose"`` after all where keeping the
+        joints is refused (fingers closed around the object without entering it); always
+        ``"keep"`` for a hand without joints or whose closing joints cannot be told. A raw
+        recorded grasp with its fingers closed through the object is re-closed; a grasp
+        whose only penetration is the palm's keeps its joints.
     rotation : bool
         Let the object rotate as well as translate.
     tolerance_mm : float
@@ -182,13 +270,28 @@ def separate(
         vanishes while the volume does not), no step that sheds volume, or more than
         ``max_steps`` steps; the message says which, and what to try.
     """
-    if fingers not in ("keep", "reclose"):
-        raise SeparationError(f"fingers={fingers!r}; use 'keep' or 'reclose'.")
+    if fingers not in FINGERS:
+        raise SeparationError(f"fingers={fingers!r}; use 'auto', 'keep' or 'reclose'.")
     if not (isinstance(tolerance_mm, int | float) and 0 < tolerance_mm < PUSH_MM):
         raise SeparationError(
             f"tolerance_mm={tolerance_mm!r}; use a gap in mm above 0 and below {PUSH_MM}."
         )
     backend = _exact_backend(backend)
+    mode, buried = _resolve_fingers(grasp, fingers, backend)
+    try:
+        done = _separated(grasp, mode, backend, rotation, tolerance_mm, max_steps)
+    except SeparationError:
+        # "auto" kept the joints (no finger link buried), but fingers closed around the object
+        # without entering it can still leave no rigid way out: then it re-closes them.
+        if fingers != "auto" or mode != "keep" or buried is None or not grasp.hand.joint_names:
+            raise
+        mode = "reclose"
+        done = _separated(grasp, mode, backend, rotation, tolerance_mm, max_steps)
+    return dataclasses.replace(done, fingers=mode, buried_links=buried)
+
+
+def _separated(grasp, fingers, backend, rotation, tolerance_mm, max_steps) -> Separation:
+    """`separate` with ``fingers`` "keep" or "reclose" (checked options, an `ExactBackend`)."""
     scale = grasp.frame.scale
     start = backend.volume_gradients(grasp, np.eye(4)[None])
     before = float(start.volumes[0]) / scale**3
@@ -202,6 +305,8 @@ def separate(
     work = grasp
     if fingers == "reclose" and grasp.hand.joint_names:
         work = Grasp(_opened(grasp), grasp.object, grasp.object_pose, name=grasp.name)
+    # What a refusal suggests: re-closing, unless that is what failed.
+    hint = RECLOSE_HINT if fingers == "keep" and grasp.hand.joint_names else ""
     pose = np.eye(4)
     steps = 0
     while True:
@@ -213,8 +318,7 @@ def separate(
             raise SeparationError(
                 f"grasp {grasp.name!r}: still {volume / scale**3:.3g} m^3 inside after "
                 f"{max_steps} steps; the hand may hold the object in a way no small rigid "
-                "motion undoes (try fingers='reclose', --reclose on the command line, or a "
-                "larger max_steps)."
+                f"motion undoes; try {hint + ' or ' if hint else ''}a larger max_steps."
             )
         wg = weights * g
         gg = float(g @ wg)
@@ -222,8 +326,7 @@ def separate(
             raise SeparationError(
                 f"grasp {grasp.name!r}: the object is enclosed by the hand (or the hand by "
                 "the object): the volume's gradient vanishes, so no rigid motion sheds "
-                "volume to first order; try fingers='reclose' (--reclose on the command line) "
-                "to open the fingers."
+                f"volume to first order{'; try ' + hint + ' to open the fingers' if hint else ''}."
             )
         xi = -volume * wg / gg
         big = max(np.linalg.norm(xi[:3]), np.linalg.norm(xi[3:])) / MAX_STEP
@@ -238,8 +341,8 @@ def separate(
         else:
             raise SeparationError(
                 f"grasp {grasp.name!r}: no step along the volume's gradient sheds volume "
-                f"(volume {volume / scale**3:.3g} m^3); the object is wedged in the hand; "
-                "try fingers='reclose', --reclose on the command line."
+                f"(volume {volume / scale**3:.3g} m^3); the object is wedged in the hand"
+                f"{'; try ' + hint if hint else ''}."
             )
         direction = xi / _norm(xi)
         if after == 0:

@@ -23,10 +23,14 @@ HELP = "move a penetrating object out of the hand by the smallest rigid motion"
 DESCRIPTION = (
     "Move GRASP's object out of the hand by gradient steps on the exact intersection "
     "volume until it reads 0, leaving the object within --tolerance-mm of the hand (in "
-    "contact). With --reclose the fingers open first and close onto the object again. "
-    "Refuses (exit status 2) when the object is enclosed by the hand."
+    "contact). Where a finger is buried in the object (--fingers auto, the default) or with "
+    "--fingers reclose, the fingers open first and close onto the object again. Refuses "
+    "(exit status 2) when the object is enclosed by the hand."
 )
-EXAMPLE = "exactgrasp separate grasp.json -o separated.json --reclose"
+EXAMPLE = "exactgrasp separate grasp.json -o separated.json --fingers keep"
+#: ``--fingers``: `exactgrasp.separation.FINGERS`, written out so that ``--help`` loads no
+#: geometry (a test checks that the two agree).
+FINGERS = ("auto", "keep", "reclose")
 
 
 def cmd_separate(args: argparse.Namespace) -> int:
@@ -36,7 +40,7 @@ def cmd_separate(args: argparse.Namespace) -> int:
     grasp = grasp_from_args(args)
     result = separate(
         grasp,
-        fingers="reclose" if args.reclose else "keep",
+        fingers=args.fingers,
         rotation=args.rotation,
         tolerance_mm=args.tolerance_mm,
         max_steps=args.max_steps,
@@ -50,6 +54,8 @@ def cmd_separate(args: argparse.Namespace) -> int:
         "joint_changes_rad": result.joint_changes,
         "in_contact": result.in_contact,
         "steps": result.steps,
+        "fingers": result.fingers,
+        "buried_links": result.buried_links,
         "output": str(out),
     }
     if args.json:
@@ -60,6 +66,9 @@ def cmd_separate(args: argparse.Namespace) -> int:
         f"{result.translation_mm:.3f} mm (centroid) and turned {result.rotation_deg:.3f} deg "
         f"in {result.steps} gradient steps"
     )
+    if result.fingers == "reclose":
+        why = f" (buried: {', '.join(result.buried_links)})" if result.buried_links else ""
+        print(f"fingers opened and closed again{why}")
     for name, change in result.joint_changes.items():
         print(f"  {name}: {change:+.4f} rad")
     contact = "in contact" if result.in_contact else "apart"
@@ -73,9 +82,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser = add_command(subparsers, "separate", cmd_separate, HELP, DESCRIPTION, EXAMPLE)
     add_grasp_file(parser, "separated grasp JSON file to write")
     parser.add_argument(
-        "--reclose",
-        action="store_true",
-        help="open the closing joints first and close them onto the moved object after",
+        "--fingers",
+        choices=FINGERS,
+        default="auto",
+        help="reclose: open the closing joints first and close them onto the moved object "
+        "after; keep: leave the joints; auto (default): reclose where a finger link has more "
+        "than a thousandth of its volume inside the object, else keep",
     )
     parser.add_argument(
         "--rotation",

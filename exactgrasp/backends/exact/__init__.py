@@ -2,10 +2,10 @@
 
 Modules by stage: `reference` (the plain boolean, the agreement rule), `intersector` (the
 array-level core), `backend` (the `Backend`), `tables` (the kernel's named tables), `grids` and
-`prepare` (built once per grasp), `pose` (the per-pose driver) with its stages `seeds`,
-`search`, `pairs`, `classify` and `sums`, on `cells` and `predicates`; every tolerance in
-`tolerances`; the volume's derivatives in `moments` (what they are, the boolean reference),
-`moment_sums` (in the kernel) and `gradients` (`VolumeGradients`).
+`prepare` (built once per grasp), `pose` (the per-pose driver) with its stages `seeds` (with
+its `filters`), `search`, `pairs`, `classify` and `sums`, on `cells` and `predicates`; every
+tolerance in `tolerances`; the volume's derivatives in `moments` (what they are, the boolean
+reference), `moment_sums` (in the kernel) and `gradients` (`VolumeGradients`).
 """
 
 from __future__ import annotations

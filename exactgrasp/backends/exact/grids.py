@@ -1,5 +1,6 @@
-"""Cell grids of the exact backend, built once per grasp: each mesh's `tables.CellGrid`, the
-hand's vertices numbered cell by cell, and the hand grid's per-cell search tables.
+"""Cell grids of the exact backend, built once per grasp: each mesh's cell edge (`grid_cell`)
+and `tables.CellGrid`, the hand's vertices numbered cell by cell, and the hand grid's per-cell
+search tables.
 
 See "Method, once per grasp" in ``docs/exact-backend.md``.
 """
@@ -8,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from exactgrasp.backends import defaults
 from exactgrasp.backends.exact.cells import raster_triangles
 from exactgrasp.backends.exact.tables import (
     BOX_MAX,
@@ -22,7 +24,27 @@ from exactgrasp.backends.exact.tables import (
     CellGrid,
 )
 from exactgrasp.backends.exact.tolerances import GRID_MARGIN, LENGTH_FLOOR, NORMAL_FLOOR
+from exactgrasp.errors import BackendError
 from exactgrasp.geometry.winding import winding_number
+
+#: Largest grid a cell option may ask for (cells per grid): about 1.6 GB of tables.
+MAX_GRID_CELLS = 200_000_000
+
+
+def grid_cell(vertices: np.ndarray, cell: float | None, key: str) -> float:
+    """The grid cell edge for a mesh: ``cell`` if given (checked against `MAX_GRID_CELLS`),
+    else 1/48 of the mesh's largest extent."""
+    extent = np.ptp(vertices, axis=0)
+    if cell is None:
+        return float(extent.max() / defaults.EXACT_CELLS_PER_EXTENT)
+    cells = float(np.prod(np.ceil(extent / cell) + 3))
+    if cells > MAX_GRID_CELLS:
+        raise BackendError(
+            f"{key}={cell:g} lays {cells:.3g} grid cells over a mesh of extent "
+            f"{extent.max():.4g}, more than {MAX_GRID_CELLS:,}; use a {key} of at least "
+            f"{extent.max() / (MAX_GRID_CELLS ** (1 / 3) - 3):.3g}, or None for the default."
+        )
+    return float(cell)
 
 
 def grid_frame(V: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:

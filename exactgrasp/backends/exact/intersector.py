@@ -44,12 +44,18 @@ from exactgrasp.backends.exact.culling import (
     worth_building,
 )
 from exactgrasp.backends.exact.extrapolate import extrapolated
-from exactgrasp.backends.exact.grids import build_grid, cell_order, morton_order
+from exactgrasp.backends.exact.grids import build_grid, cell_order, grid_cell, morton_order
 from exactgrasp.backends.exact.moment_sums import empty_moment_tables, moment_tables
 from exactgrasp.backends.exact.moments import face_origins, shift_moments
 from exactgrasp.backends.exact.options import ExactOptions, check_options
 from exactgrasp.backends.exact.pose import pose_volumes
-from exactgrasp.backends.exact.prepare import hand_tables, object_tables, prepare_mesh
+from exactgrasp.backends.exact.prepare import (
+    bounds_centre,
+    hand_tables,
+    object_tables,
+    prepare_mesh,
+    shifted,
+)
 from exactgrasp.backends.exact.reference import Mesh, solids
 from exactgrasp.backends.exact.tables import (
     CULLED,
@@ -68,12 +74,9 @@ from exactgrasp.backends.exact.tolerances import (
     LENGTH_FLOOR,
     TINY_FACE,
 )
-from exactgrasp.errors import BackendError
 from exactgrasp.geometry.bvh import MeshPair
 from exactgrasp.geometry.manifold import mesh_arrays, union_solids
 
-#: Largest grid a cell option may ask for (cells per grid): about 1.6 GB of tables.
-MAX_GRID_CELLS = 200_000_000
 #: What `Intersection.pose_sources` says, indexed by the kernel's result code.
 POSE_SOURCES = np.empty(4, dtype="<U7")
 POSE_SOURCES[[OK, CULLED, DEGENERATE, OVERFLOW]] = ("kernel", "culled", "limit", "limit")
@@ -85,36 +88,6 @@ PIECES_PER_THREAD = 8
 PIECE_POSES = 32
 #: The moment tables of a call that wants volumes only.
 EMPTY_MOMENTS = empty_moment_tables()
-
-
-def grid_cell(vertices: np.ndarray, cell: float | None, key: str) -> float:
-    """The grid cell edge for a mesh: ``cell`` if given (checked against `MAX_GRID_CELLS`),
-    else 1/48 of the mesh's largest extent."""
-    extent = np.ptp(vertices, axis=0)
-    if cell is None:
-        return float(extent.max() / defaults.EXACT_CELLS_PER_EXTENT)
-    cells = float(np.prod(np.ceil(extent / cell) + 3))
-    if cells > MAX_GRID_CELLS:
-        raise BackendError(
-            f"{key}={cell:g} lays {cells:.3g} grid cells over a mesh of extent "
-            f"{extent.max():.4g}, more than {MAX_GRID_CELLS:,}; use a {key} of at least "
-            f"{extent.max() / (MAX_GRID_CELLS ** (1 / 3) - 3):.3g}, or None for the default."
-        )
-    return float(cell)
-
-
-def bounds_centre(meshes: list[Mesh]) -> np.ndarray:
-    """Centre of the bounding box of all vertices of the meshes, shape (3,)."""
-    if not meshes:
-        raise BackendError("no hand link meshes given; pass at least one (V, F) pair.")
-    lo = np.min([np.min(V, axis=0) for V, _ in meshes], axis=0)
-    hi = np.max([np.max(V, axis=0) for V, _ in meshes], axis=0)
-    return 0.5 * (lo + hi)
-
-
-def shifted(meshes: list[Mesh], origin: np.ndarray) -> list[Mesh]:
-    """The meshes with ``origin`` subtracted from their vertices (new arrays)."""
-    return [(np.asarray(V, dtype=np.float64) - origin, F) for V, F in meshes]
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,13 @@
-"""Once-per-grasp tables of the exact backend: mesh topology, the hand's face, edge and part
-terms with their error bounds, and the object's pose-independent terms.
+"""Once-per-grasp tables of the exact backend: the local frame they are built in (the centre
+of the hand's bounds, `bounds_centre`), mesh topology, the hand's face, edge and part terms with
+their error bounds, and the object's pose-independent terms.
 
 See "Method, once per grasp" and "The volume's bound" in ``docs/exact-backend.md``.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -48,13 +51,30 @@ from exactgrasp.backends.exact.tolerances import (
     U_EXTENDED,
     U,
 )
-from exactgrasp.errors import Fix, MeshError
+from exactgrasp.errors import BackendError, Fix, MeshError
+
+if TYPE_CHECKING:
+    from exactgrasp.backends.exact.reference import Mesh
 
 _REPAIR_HINT = (
     "the exact backend needs closed, consistently oriented surfaces; load the mesh with ",
     Fix("repair", True),
     " (or fix it in a mesh editor) and try again.",
 )
+
+
+def bounds_centre(meshes: list[Mesh]) -> np.ndarray:
+    """Centre of the bounding box of all vertices of the meshes, shape (3,)."""
+    if not meshes:
+        raise BackendError("no hand link meshes given; pass at least one (V, F) pair.")
+    lo = np.min([np.min(V, axis=0) for V, _ in meshes], axis=0)
+    hi = np.max([np.max(V, axis=0) for V, _ in meshes], axis=0)
+    return 0.5 * (lo + hi)
+
+
+def shifted(meshes: list[Mesh], origin: np.ndarray) -> list[Mesh]:
+    """The meshes with ``origin`` subtracted from their vertices (new arrays)."""
+    return [(np.asarray(V, dtype=np.float64) - origin, F) for V, F in meshes]
 
 
 def prepare_mesh(V: np.ndarray, F: np.ndarray) -> MeshTables:

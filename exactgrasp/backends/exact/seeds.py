@@ -8,10 +8,12 @@ dual graph, so it crosses a co-tree edge of the hand (`prepare.cotree_edges`). T
 therefore find a pair on every curve: each object edge near the hand's surface against the
 hand faces listed in the hand-grid cells it passes (`object_edge_seeds`, in the hand's frame),
 and each co-tree edge near the object's surface against the object faces listed in the
-object-grid cells it touches (`cotree_seeds`, in the object's frame). Both are filters whose
-tolerances exceed their rounding (and, in the object's frame, the pose's departure from a
-rotation): they may keep a pair that does not cross, which its evaluation rejects, and never
-drop one that does. See "Method", step 2, in ``docs/exact-backend.md``.
+object-grid cells it touches (`cotree_seeds`, in the object's frame); runs of edges far from
+the other surface are skipped first (`near_runs`). Both searches pass what they meet through
+the seeds' filters (`filters`), whose tolerances exceed their rounding (and, in the object's
+frame, the pose's departure from a rotation): they may keep a pair that does not cross, which
+its evaluation rejects, and never drop one that does. See "Method", step 2, in
+``docs/exact-backend.md``.
 
 Long because each search is one kernel whose loops over edges, cells and listed faces share
 their locals: a call per cell would pass arrays and update their reference counts.
@@ -22,26 +24,24 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.backends.exact.cells import surface_cells_in
+from exactgrasp.backends.exact.filters import (
+    cell_row,
+    cell_survivors,
+    filter_row,
+    may_cross,
+    piece_box,
+    piece_meets_cell,
+    sphere_meets_cell,
+)
 from exactgrasp.backends.exact.tables import (
     BOX_MAX,
     BOX_MIN,
-    CELL_AXIS,
-    CELL_BOX_MAX,
-    CELL_BOX_MIN,
-    CELL_SLAB_HIGH,
-    CELL_SLAB_LOW,
     CHUNK,
     COTREE_CHUNK,
-    FILTER_NORMAL,
-    FILTER_OFFSET,
-    FILTER_SIDE_COLUMNS,
-    FILTER_SIDE_OFFSET,
-    FILTER_SIDES,
-    LIST_GROUP,
     SPHERE_CENTRE,
     SPHERE_RADIUS,
 )
-from exactgrasp.backends.exact.tolerances import FILTER_ERR, GRID_MARGIN, PLANE_TOL, U
+from exactgrasp.backends.exact.tolerances import FILTER_ERR, GRID_MARGIN, PLANE_TOL
 from exactgrasp.compiling import inner
 
 #: `near_runs` scans the cells of a run's box only up to this many (long edges make big runs).
@@ -58,22 +58,6 @@ def frame_defect(R):
             dot = R[0, i] * R[0, j] + R[1, i] * R[1, j] + R[2, i] * R[2, j]
             worst = max(worst, abs(dot - (1.0 if i == j else 0.0)))
     return worst
-
-
-@inner(nogil=True, error_model="numpy")
-def _sphere_meets_cell(row, m, r, margin):
-    """Whether the sphere of centre m (x, y, z) and radius r may meet what a cell holds (its
-    bounds row ``row``, `_cell_row`): the slab along the cell's axis (widened by ``margin``)
-    and the clipped common box, with one branch."""
-    m0, m1, m2 = m
-    a = row[CELL_AXIS] * m0 + row[CELL_AXIS + 1] * m1 + row[CELL_AXIS + 2] * m2
-    lo, hi = CELL_BOX_MIN, CELL_BOX_MAX
-    return (
-        (a - r <= row[CELL_SLAB_HIGH] + margin) & (a + r >= row[CELL_SLAB_LOW] - margin)
-        & (row[lo] <= m0 + r) & (row[hi] >= m0 - r)
-        & (row[lo + 1] <= m1 + r) & (row[hi + 1] >= m1 - r)
-        & (row[lo + 2] <= m2 + r) & (row[hi + 2] >= m2 - r)
-    )  # fmt: skip
 
 
 @inner(nogil=True, error_model="numpy")
@@ -140,149 +124,9 @@ def near_runs(runs, R, t, inverse, stretch, grow, scan, grid, rng, parent, per, 
                         c = (i * n1 + j) * n2 + kk
                         if cs[c + 1] == cs[c]:
                             continue
-                        row = _cell_row(PT, c)
-                        ok = ok | _sphere_meets_cell(row, (m0, m1, m2), r, margin)
+                        row = cell_row(PT, c)
+                        ok = ok | sphere_meets_cell(row, (m0, m1, m2), r, margin)
         near[k] = ok
-
-
-@inner(nogil=True, error_model="numpy")
-def _crossing_point(p, q, dp, dq, eps, ptol, g):
-    """Where segment p q (ends (x, y, z)) crosses a plane, from its ends' distances dp, dq
-    (opposite signs or within the tolerance ``max(ptol, 2 eps)``, each erring by up to eps),
-    and the tolerance of a test of that point against the face's edges
-    (`prepare.face_filters`): (fixed, x, y, z, tolerance), ``fixed`` False where the distances
-    do not fix the point well enough (the face is then kept). ``g`` bounds every coordinate.
-    Scalars only: a routine taking arrays would update their reference counts."""
-    px, py, pz = p
-    qx, qy, qz = q
-    tol = max(ptol, 2.0 * eps)
-    span = abs(dp) + abs(dq)
-    if span <= 4.0 * tol:
-        return False, 0.0, 0.0, 0.0, 0.0
-    lam = dp / (dp - dq)
-    dx, dy, dz = qx - px, qy - py, qz - pz
-    # The parameter errs by at most 4 eps / span (`pairs.param_err`), the point by that times
-    # the segment's extent plus rounding; the edge distances by about a plane distance's error.
-    xerr = (4.0 * eps / span + 4.0 * U) * max(abs(dx), abs(dy), abs(dz)) + 6.0 * U * g
-    return True, px + lam * dx, py + lam * dy, pz + lam * dz, 4.0 * eps + 2.0 * xerr + ptol
-
-
-@inner(nogil=True, error_model="numpy")
-def _filter_dot(row, column, x, y, z):
-    """``normal · x`` of the filter normal (3) at ``column`` of a face's filter row ``row``."""
-    return row[column] * x + row[column + 1] * y + row[column + 2] * z
-
-
-@inner(nogil=True, error_model="numpy")
-def _may_cross(row, p, q, eps, ptol, g):
-    """Whether segment p q (ends (x, y, z)) may cross a face whose filter row
-    (`prepare.face_filters`, columns ``FILTER_*``) is ``row``, a tuple of its values: False
-    only where both ends lie beyond the tolerance ``max(ptol, 2 eps)`` on one side of its
-    plane, or where the crossing point lies beyond its tolerance outside one of its edges.
-    ``eps`` bounds a plane distance's error, ``g`` every coordinate. A tuple, not the filters'
-    array: an array argument would cost two atomic reference-count updates a call."""
-    dp = _filter_dot(row, FILTER_NORMAL, p[0], p[1], p[2]) - row[FILTER_OFFSET]
-    dq = _filter_dot(row, FILTER_NORMAL, q[0], q[1], q[2]) - row[FILTER_OFFSET]
-    tol = max(ptol, 2.0 * eps)
-    if ((dp > tol) & (dq > tol)) | ((dp < -tol) & (dq < -tol)):
-        return False
-    fixed, x, y, z, st = _crossing_point(p, q, dp, dq, eps, ptol, g)
-    # Corner k's edge: its normal from FILTER_SIDES + FILTER_SIDE_COLUMNS k, then its offset.
-    s0 = FILTER_SIDES
-    s1 = FILTER_SIDES + FILTER_SIDE_COLUMNS
-    s2 = FILTER_SIDES + 2 * FILTER_SIDE_COLUMNS
-    return not (
-        fixed
-        and (
-            (_filter_dot(row, s0, x, y, z) < row[s0 + FILTER_SIDE_OFFSET] - st)
-            | (_filter_dot(row, s1, x, y, z) < row[s1 + FILTER_SIDE_OFFSET] - st)
-            | (_filter_dot(row, s2, x, y, z) < row[s2 + FILTER_SIDE_OFFSET] - st)
-        )
-    )
-
-
-@inner(nogil=True, error_model="numpy")
-def _filter_row(FL, f):
-    """Row f of the filters (m, `FILTER_COLUMNS`) as a tuple, for `_may_cross`."""
-    return (
-        FL[f, 0], FL[f, 1], FL[f, 2], FL[f, 3], FL[f, 4], FL[f, 5], FL[f, 6], FL[f, 7],
-        FL[f, 8], FL[f, 9], FL[f, 10], FL[f, 11], FL[f, 12], FL[f, 13], FL[f, 14], FL[f, 15],
-    )  # fmt: skip
-
-
-@inner(nogil=True, error_model="numpy")
-def _cell_row(PT, c):
-    """Row c of a grid's cell bounds (`tables.CellGrid.bounds`, `CELL_BOUNDS_COLUMNS` values)
-    as a tuple, for `_piece_meets_cell`."""
-    return (
-        PT[c, 0], PT[c, 1], PT[c, 2], PT[c, 3], PT[c, 4], PT[c, 5], PT[c, 6], PT[c, 7],
-        PT[c, 8], PT[c, 9], PT[c, 10],
-    )  # fmt: skip
-
-
-@inner(nogil=True, error_model="numpy")
-def _piece_box(a, b, grow):
-    """The box of the piece a b of a segment (ends (x, y, z)), grown by ``grow``: (lower
-    corner, upper corner)."""
-    ax, ay, az = a
-    bx, by, bz = b
-    x0, x1 = min(ax, bx) - grow, max(ax, bx) + grow
-    y0, y1 = min(ay, by) - grow, max(ay, by) + grow
-    z0, z1 = min(az, bz) - grow, max(az, bz) + grow
-    return (x0, y0, z0), (x1, y1, z1)
-
-
-@inner(nogil=True, error_model="numpy")
-def _piece_meets_cell(row, a, b, box, tol):
-    """Whether the piece a b of a segment (its box ``box``, already grown) may meet what a cell
-    holds of its faces: their clipped common box and the slab ``row[CELL_SLAB_LOW] - tol <= n·x
-    <= row[CELL_SLAB_HIGH] + tol`` along the direction ``n`` at ``row[CELL_AXIS]`` (the cell's
-    bounds row, `_cell_row`), with one branch. A tuple, not the bounds' array: an array
-    argument would cost atomic reference-count updates a call."""
-    (x0, y0, z0), (x1, y1, z1) = box
-    ax, ay, az = a
-    bx, by, bz = b
-    n0, n1, n2 = row[CELL_AXIS], row[CELL_AXIS + 1], row[CELL_AXIS + 2]
-    pa = n0 * ax + n1 * ay + n2 * az
-    pb = n0 * bx + n1 * by + n2 * bz
-    lo, hi = CELL_BOX_MIN, CELL_BOX_MAX
-    return (
-        (row[lo] <= x1) & (row[hi] >= x0) & (row[lo + 1] <= y1) & (row[hi + 1] >= y0)
-        & (row[lo + 2] <= z1) & (row[hi + 2] >= z0)
-        & (min(pa, pb) <= row[CELL_SLAB_HIGH] + tol) & (max(pa, pb) >= row[CELL_SLAB_LOW] - tol)
-    )  # fmt: skip
-
-
-@inner(nogil=True, error_model="numpy")
-def _box_meets(B, i, box):
-    """Whether box row i of ``B`` (columns `BOX_MIN`, `BOX_MAX`) meets ``box`` (lower corner,
-    upper corner), with one branch."""
-    (x0, y0, z0), (x1, y1, z1) = box
-    lo, hi = BOX_MIN, BOX_MAX
-    return (
-        (B[i, lo] <= x1) & (B[i, hi] >= x0) & (B[i, lo + 1] <= y1) & (B[i, hi + 1] >= y0)
-        & (B[i, lo + 2] <= z1) & (B[i, hi + 2] >= z0)
-    )  # fmt: skip
-
-
-# Compiled into each search (numba inlines it before typing): called per cell with five
-# arrays, it would otherwise stay a call that LLVM does not inline.
-@inner(nogil=True, error_model="numpy", inline="always")
-def _cell_survivors(cs, gs, GB, CBB, c, box, buf):
-    """The entries of cell c's list (`tables.CellGrid`) whose clipped boxes meet ``box`` (lower
-    corner, upper corner; ``cs``, ``gs``, ``GB``, ``CBB``: the grid's ``cell_start``,
-    ``group_start``, ``groups`` and ``boxes``): the list's groups' boxes first, then the boxes
-    of the groups that meet it, each comparison evaluated in full and decided with one branch.
-    The entries go to ``buf``; returns how many."""
-    m = 0
-    for g in range(gs[c], gs[c + 1]):
-        if not _box_meets(GB, g, box):
-            continue
-        q0 = cs[c] + LIST_GROUP * (g - gs[c])
-        for q in range(q0, min(q0 + LIST_GROUP, cs[c + 1])):
-            buf[m] = q
-            m += 1 if _box_meets(CBB, q, box) else 0
-    return m
 
 
 @inner(nogil=True, error_model="numpy")
@@ -387,9 +231,9 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
                     ax_, ay_, az_ = px + lam_a * dx, py + lam_a * dy, pz + lam_a * dz
                     bx_, by_, bz_ = px + lam_b * dx, py + lam_b * dy, pz + lam_b * dz
                     a, b = (ax_, ay_, az_), (bx_, by_, bz_)
-                    box = _piece_box(a, b, margin)
-                    if _piece_meets_cell(_cell_row(PT, c), a, b, box, margin):
-                        m = _cell_survivors(cs, gs, GB, CBB, c, box, buf)
+                    box = piece_box(a, b, margin)
+                    if piece_meets_cell(cell_row(PT, c), a, b, box, margin):
+                        m = cell_survivors(cs, gs, GB, CBB, c, box, buf)
                         # The survivors against the piece itself (not its box): the three axes
                         # d × e_k separating a segment from a box, with one branch each.
                         dx_, dy_, dz_ = bx_ - ax_, by_ - ay_, bz_ - az_
@@ -416,7 +260,7 @@ def object_edge_seeds(object_mesh, obj, hand, hand_grid, BV, near, gscale, work,
                             # Both ends beyond the tolerance on one side: no crossing. Else the
                             # crossing point must not lie beyond it outside an edge of the face.
                             eps = (FE[ft] + FILTER_ERR) * gscale
-                            if not _may_cross(_filter_row(FL, ft), start, end, eps, ptol, gscale):
+                            if not may_cross(filter_row(FL, ft), start, end, eps, ptol, gscale):
                                 continue
                             n = _append_seed(seeds, n, ft, s1)
                             if n < 0:
@@ -493,7 +337,7 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
                 ax_, ay_, az_ = px + la * (qx - px), py + la * (qy - py), pz + la * (qz - pz)
                 bx_, by_, bz_ = px + lb * (qx - px), py + lb * (qy - py), pz + lb * (qz - pz)
                 a, b = (ax_, ay_, az_), (bx_, by_, bz_)
-                box = _piece_box(a, b, grow)
+                box = piece_box(a, b, grow)
                 (x0, y0, z0), (x1, y1, z1) = box
                 i0 = max(int(np.floor((x0 - lo[0]) * ih)), 0)
                 i1 = min(int(np.floor((x1 - lo[0]) * ih)), dims[0] - 1)
@@ -509,14 +353,14 @@ def cotree_seeds(hand_mesh, hand, obj, object_grid, R, t, near, gscale, ferr, hc
                                 continue
                             # The piece against what the cell holds, then the listed faces'
                             # clipped boxes, each with one branch.
-                            if not _piece_meets_cell(_cell_row(PT, c), a, b, box, grow):
+                            if not piece_meets_cell(cell_row(PT, c), a, b, box, grow):
                                 continue
-                            m = _cell_survivors(cs, gs, GB, CBB, c, box, buf)
+                            m = cell_survivors(cs, gs, GB, CBB, c, box, buf)
                             for jj in range(m):
                                 s = ct[buf[jj]]
                                 eps = (FE[s] + FILTER_ERR) * gscale + ferr
-                                row = _filter_row(FL, s)
-                                keep = _may_cross(row, start, end, eps, ptol, gscale)
+                                row = filter_row(FL, s)
+                                keep = may_cross(row, start, end, eps, ptol, gscale)
                                 if not keep:
                                     continue
                                 n = _append_seed(seeds, n, t1f, s)
