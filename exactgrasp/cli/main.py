@@ -6,7 +6,7 @@ Adding a command is a new module plus one entry in `COMMANDS`, whose order is th
 ``exactgrasp --help``. Handlers raise `ExactGraspError` for bad input; `main` turns it into
 a message and exit status 2 (`exactgrasp.errors.run_reporting_errors`, which also ends a
 command whose reader has gone, ``| head``, quietly with status 141). Python warnings print as
-``Category: message`` (`show_warning`), without the line of code they are attributed to.
+``Category: message`` (`format_warning`), without the line of code they are attributed to.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from exactgrasp.diagnostics import ignores_third_party_warnings
 from exactgrasp.errors import run_reporting_errors
 from exactgrasp.version import __version__
 
-__all__ = ["COMMANDS", "build_parser", "main", "show_warning"]
+__all__ = ["COMMANDS", "build_parser", "format_warning", "main"]
 
 #: The sub-command modules, in the order ``exactgrasp --help`` lists them.
 COMMANDS = (
@@ -67,11 +67,12 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+def format_warning(message, category, filename, lineno, line=None) -> str:
     """A warning as the command prints it: ``Category: message``. The line of code it is
     attributed to (the console script's own, for exactgrasp's warnings) means nothing to
-    someone at a shell. Signature of `warnings.showwarning`."""
-    print(f"{category.__name__}: {message}", file=sys.stderr if file is None else file)
+    someone at a shell. Signature of `warnings.formatwarning`: only the text changes, so a
+    caller that records warnings (`warnings.catch_warnings`) still gets them."""
+    return f"{category.__name__}: {message}\n"
 
 
 @ignores_third_party_warnings
@@ -79,12 +80,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``exactgrasp`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    shown = warnings.showwarning
-    warnings.showwarning = show_warning
+    formatted = warnings.formatwarning
+    warnings.formatwarning = format_warning
     try:
         return run_reporting_errors(args.func, args, prog=f"exactgrasp {args.command}")
     finally:
-        warnings.showwarning = shown
+        warnings.formatwarning = formatted
 
 
 if __name__ == "__main__":
