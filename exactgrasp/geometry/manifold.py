@@ -93,7 +93,35 @@ def to_manifold(
         )
     if solid.volume() <= 0:
         raise MeshError(f"{name} has non-positive volume (faces inward?); ", *fix_parts)
+    _check_import(solid, V, F, name)
     return solid
+
+
+#: How far manifold3d's volume of an imported mesh may lie from the volume its faces enclose
+#: (relative): far above the rounding of either sum, far below any face it could drop.
+IMPORT_RTOL = 1e-9
+
+
+def _check_import(solid: manifold3d.Manifold, V: np.ndarray, F: np.ndarray, name: str) -> None:
+    """Refuse a mesh whose manifold3d import encloses another volume than its faces do.
+
+    manifold3d simplifies what it imports, and on some meshes (a surface folding back on
+    itself in a zero-thickness fin, as its own union of shells touching along a face can
+    leave) it collapses a vertex that is not flat and changes the solid without a word."""
+    P = V - V.mean(axis=0)
+    a, b, c = P[F[:, 0]], P[F[:, 1]], P[F[:, 2]]
+    enclosed = float(np.einsum("ij,ij->", a, np.cross(b, c))) / 6.0
+    if abs(solid.volume() - enclosed) <= IMPORT_RTOL * abs(enclosed):
+        return
+    kept = {tuple(x) for x in np.asarray(solid.to_mesh64().vert_properties)[:, :3]}
+    lost = [x for x in V if tuple(x) not in kept]
+    where = format_point(lost[0]) if lost else "?"
+    raise MeshError(
+        f"{name}: manifold3d reads its {len(F)} faces as enclosing {solid.volume():.9g} "
+        f"where they enclose {enclosed:.9g} (it collapsed the surface near {where}, which "
+        "folds back on itself there), so no boolean of it would be exact; move the part "
+        "that folds back by a small amount, or merge the mesh's parts in a modeller."
+    )
 
 
 def union_solids(solids: Sequence[manifold3d.Manifold]) -> manifold3d.Manifold:

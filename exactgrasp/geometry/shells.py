@@ -369,6 +369,10 @@ def _merge(parts, pos: list[int], neg: list[int], name: str) -> tuple[np.ndarray
     mesh = solid.to_mesh64()
     merged_v = np.asarray(mesh.vert_properties, dtype=np.float64)[:, :3]
     merged_f = np.asarray(mesh.tri_verts, dtype=np.int64)
+    # Read back at once: a union that manifold3d itself cannot import faithfully (a surface
+    # folding back on itself) is refused here, where the mesh is named, not at a boolean.
+    shells = ", ".join(str(i) for i in (*pos, *neg))
+    to_manifold(merged_v, merged_f, f"{name} (shells {shells} merged)", _MERGE_FIX)
     if not pos:
         merged_f = merged_f[:, ::-1]
     return merged_v, merged_f
