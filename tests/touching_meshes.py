@@ -171,10 +171,10 @@ def random_poses(rng: np.random.Generator, n: int, centre, spread: float) -> np.
     return poses
 
 
-def scenes(rng: np.random.Generator, ball):
+def scenes(rng: np.random.Generator, ball, n_ball: int = 12):
     """The fuzz family: for every solid and frame, objects touching its special line (moved
     along it by dyadic steps: exact contact in exact frames) and ``ball`` (vertices, faces,
-    centred at the origin) at random poses around the line. Yields (label, solid (V, F),
+    centred at the origin) at ``n_ball`` random poses around the line. Yields (label, solid (V, F),
     object (V, F), poses (k, 4, 4) or None, the solid's volume), all in the frame. A touching
     object comes already moved (poses None): a pose applied in floating point would round
     the contact away differently in the library and in a reference."""
@@ -182,7 +182,7 @@ def scenes(rng: np.random.Generator, ball):
         V, F = build()
         p, _ = SPECIAL_LINES[name]
         objects, direction = touching_objects(name)
-        ball_poses = random_poses(rng, 12, p, 0.35)
+        ball_poses = random_poses(rng, n_ball, p, 0.35)
         for frame, s, R, c in frames(rng):
             S = np.eye(4)
             S[:3, :3], S[:3, 3] = s * R, c
