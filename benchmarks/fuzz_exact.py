@@ -151,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
             record(report, category, case, scene, got, plain, want, ex)
             print(
                 f"[{i + 1}/{args.cases}] {case}: {scene.name}: {len(got)} poses, "
-                f"boolean {ex.stats['poses_limit']}, culled {ex.stats['poses_culled']}",
+                f"limit {ex.stats['poses_limit']}, culled {ex.stats['poses_culled']}",
                 flush=True,
             )
             for line in mismatches(scene, got, want, ex.volume_bounds, is_rational(scene)):
@@ -170,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{len(report['broadphase_differences'])}, errors {len(report['errors'])}"
     )
     print(
-        f"boolean fallbacks {report['poses_limit']}, culled poses {report['poses_culled']}, "
+        f"limits {report['poses_limit']}, culled poses {report['poses_culled']}, "
         f"poses with a rational reference {report['poses_rational']}"
     )
     for c, v in report["per_category"].items():
