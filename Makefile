@@ -9,7 +9,7 @@ STAMP := $(VENV)/.installed
 # What building the compiled kernels needs beside a C compiler (pyproject.toml's build-system
 # requirements, and ninja), installed into the environment: an editable install rebuilds a
 # changed kernel on import with them.
-BUILD_DEPS := "meson-python>=0.16" "meson>=1.2" "Cython>=3.0.8" "ninja"
+BUILD_DEPS := "meson-python>=0.18" "meson>=1.2" "Cython>=3.0.8" "ninja"
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
