@@ -97,13 +97,29 @@ def test_dart_throwing(case):
     assert_same_bits(dart_throw(points, spacing), GOLDEN[f"dart/{case}/result"])
 
 
-def _count(tiles_key: str, shift_key: str, pieces: int) -> np.ndarray:
+def variants() -> list:
+    """The counting kernels built here: the one `kernel` picked, and both compiled builds
+    (the plain one and, on an x86-64 CPU with AVX2, the AVX2 one) where they exist."""
+    found = [count_inside]
+    try:
+        from exactgrasp.backends.voxel import _kernel
+    except ImportError:  # the numba kernels: one variant
+        return found
+    found.append(_kernel.count_inside)
+    if _kernel.cpu_has_avx2():
+        from exactgrasp.backends.voxel import _kernel_avx2
+
+        found.append(_kernel_avx2.count_inside)
+    return found
+
+
+def _count(kernel, tiles_key: str, shift_key: str, pieces: int) -> np.ndarray:
     """The counts of every pose, the poses split into `pieces` counted on as many threads."""
     a = {key.split("/", 1)[1]: value for key, value in GOLDEN.items() if key.startswith("count/")}
     counts = np.zeros((len(a["linear"]), 2), np.int64)
 
     def run(first: int, last: int) -> None:
-        count_inside(
+        kernel(
             a["linear"], a["offset"], a["coords"], int(a["n_interior"]), float(a["extent"]),
             a["boxes"], a["ranges"], int(a["n_roots"]), int(a["first_leaf"]), a["codes"],
             a[tiles_key], int(a[shift_key]), first, last, counts,
@@ -117,8 +133,9 @@ def _count(tiles_key: str, shift_key: str, pieces: int) -> np.ndarray:
 
 @pytest.mark.parametrize("pieces", [1, 3])
 @pytest.mark.parametrize("tiles", ["", "coarse/"])
-def test_counts(tiles, pieces):
-    got = _count(tiles + "tiles", tiles + "shift", pieces)
+@pytest.mark.parametrize("variant", range(len(variants())))
+def test_counts(variant, tiles, pieces):
+    got = _count(variants()[variant], tiles + "tiles", tiles + "shift", pieces)
     assert_same_bits(got, GOLDEN["count/" + tiles + "result"])
 
 

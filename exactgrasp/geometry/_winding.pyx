@@ -76,10 +76,16 @@ def winding_number(x, V, F):
         The sum of the triangles' signed solid angles seen from `x` over 4 pi: 1 inside a
         closed outward-oriented shell, 0 outside, fractional near or on the surface.
     """
-    cdef const double[:] xv = np.asarray(x, dtype=np.float64)
-    cdef const double[:, :] Vv = np.asarray(V, dtype=np.float64)
-    cdef const int64_t[:, :] Fv = np.asarray(F, dtype=np.int64)
+    cdef const double[:] xv
+    cdef const double[:, :] Vv
+    cdef const int64_t[:, :] Fv
     cdef double total
+    try:  # float64 and int64 arrays as they are: most calls, and the cheapest
+        xv, Vv, Fv = x, V, F
+    except (TypeError, ValueError):
+        xv = np.asarray(x, dtype=np.float64)
+        Vv = np.asarray(V, dtype=np.float64)
+        Fv = np.asarray(F, dtype=np.int64)
     with nogil:
         total = _winding(xv, Vv, Fv)
     return total

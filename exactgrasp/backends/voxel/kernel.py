@@ -5,9 +5,9 @@ the trilinearly interpolated hand occupancy exceeds 0.5 are counted, interior an
 points apart: ``volume = interior_inside * V_o + surface_inside * w_s``.
 
 `estimate_counts` is the compiled path (`count_inside`, compiled ahead of time from
-``_kernel.pyx``; threads share the poses, each counting its own without the GIL; it walks the
-object's tree of boxes and skips, or counts whole, the boxes that the hand's summed tables
-decide);
+``_kernel.pyx``, and for x86-64 CPUs with AVX2 also as ``_kernel_avx2``, picked at import;
+threads share the poses, each counting its own without the GIL; it walks the object's tree of
+boxes and skips, or counts whole, the boxes that the hand's summed tables decide);
 `estimate_counts_numpy` is the same estimator in plain vectorised numpy, every point of every
 pose tested. Both evaluate every point they test with the same floating-point operations in
 the same order, so their counts are identical.
@@ -20,7 +20,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from exactgrasp.backends.base import check_poses, resolve_jobs
-from exactgrasp.backends.voxel._kernel import count_inside
+from exactgrasp.backends.voxel import _kernel
 from exactgrasp.backends.voxel.grids import HandOccupancy
 from exactgrasp.backends.voxel.points import ObjectPoints
 
@@ -34,6 +34,22 @@ __all__ = [
     "volumes_of_checked",
 ]
 
+
+def _counting_kernel():
+    """``count_inside`` of ``_kernel_avx2`` where the CPU runs AVX2 and the package was built
+    with it (x86-64), else of ``_kernel``: the same source and the same counts."""
+    if _kernel.cpu_has_avx2():
+        try:
+            from exactgrasp.backends.voxel._kernel_avx2 import count_inside as avx2
+        except ImportError:  # built for a CPU family without the AVX2 variant
+            return _kernel.count_inside
+        return avx2
+    return _kernel.count_inside
+
+
+#: The counting kernel this CPU runs (`_counting_kernel`); see ``_kernel.pyx`` for its
+#: arguments.
+count_inside = _counting_kernel()
 
 # Poses a thread takes at a time: enough that taking one costs little, few enough that the
 # threads finish together.
