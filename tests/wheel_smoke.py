@@ -25,7 +25,7 @@ SUM, NONZERO, LARGEST = 254.50508652741135, 3942, 0.3229725732911827
 def main() -> int:
     start = time.perf_counter()
     import exactgrasp as eg
-    from exactgrasp.backends.voxel import _kernel, _points
+    from exactgrasp.backends.voxel import _kernel, _points, kernel
     from exactgrasp.geometry import _winding
 
     for module in (_kernel, _points, _winding):
@@ -45,7 +45,8 @@ def main() -> int:
     np.testing.assert_allclose(values.max(), LARGEST, rtol=1e-9)
     seconds = time.perf_counter() - start
     print(f"ok: exactgrasp {eg.__version__} from {Path(eg.__file__).parent}, ", end="")
-    print(f"descriptor {values.shape}, sum {values.sum():.12g}, {seconds:.1f} s in all")
+    print(f"descriptor {values.shape}, sum {values.sum():.12g}, {seconds:.1f} s in all, ", end="")
+    print(f"counting kernel {kernel.count_inside.__module__}")
     return 0
 
 
