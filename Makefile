@@ -6,12 +6,22 @@ STAMP := $(VENV)/.installed
 
 .PHONY: demo test lint format bench clean
 
+# What building the compiled kernels needs beside a C compiler (pyproject.toml's build-system
+# requirements, and ninja), installed into the environment: an editable install rebuilds a
+# changed kernel on import with them.
+BUILD_DEPS := "meson-python>=0.18" "meson>=1.2" "Cython>=3.0.8" "ninja"
+
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[all,dev]"
-	@# Compile the numba kernels here, once (numba caches them), so that the timings of
-	@# `make demo` and of the first runs are those of warm kernels.
+	$(BIN)/python -m pip install --quiet $(BUILD_DEPS)
+	@# Editable, without build isolation (meson-python's way): the build folder build/ keeps
+	@# calling this environment's meson, ninja and cython (found by their full paths).
+	PATH="$(CURDIR)/$(BIN):$$PATH" CYTHON="$(CURDIR)/$(BIN)/cython" \
+		$(BIN)/python -m pip install --quiet --no-build-isolation -e ".[all,dev]"
+	@# Compile the numba kernels that remain (the exact backend's, the geometry's predicates)
+	@# here, once (numba caches them), so that the timings of `make demo` and of the first
+	@# runs are those of warm kernels. The Cython kernels were compiled by the install.
 	$(BIN)/exactgrasp demo --quick --no-progress --out $(VENV)/compiled-kernels >/dev/null
 	touch $(STAMP)
 
@@ -35,4 +45,4 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/cold_start.py
 
 clean:
-	rm -rf $(VENV) demo-output .pytest_cache
+	rm -rf $(VENV) build demo-output .pytest_cache

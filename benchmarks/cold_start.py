@@ -1,5 +1,11 @@
 """Cold start: one voxel and one exact descriptor in a fresh process, empty numba cache or full.
 
+The winding-number and voxel kernels are compiled when the package is built (Cython): a cold
+run compiles only the numba kernels that remain (the geometry's predicates and crossings, the
+exact backend's). ``--again`` also computes each descriptor a second time in the same process
+(phase ``<backend> again``: every kernel, grid and cache warm) and prints the first descriptor's
+time over that warm one's.
+
 Each run is a new Python process with ``NUMBA_CACHE_DIR`` pointing at a folder of its own, so
 the package's own ``__pycache__`` is never read or written. A cold run starts from an empty
 folder (every kernel is compiled); the warm run after it is a second process on the folder the
@@ -17,11 +23,16 @@ thread (inclusive of the functions compiled for it, and its own share), the sign
 compiled for and what needed it (another function, or ``python:<module>``). They come from
 numba's ``numba:compile`` event, which fires on a cache miss only: a warm run records none.
 
-    python benchmarks/cold_start.py [--repeat 3] [--functions] [--order voxel,exact]
-                                    [--json results.json]
+    python benchmarks/cold_start.py [--repeat 3] [--functions] [--order voxel,exact] [--again]
+                                    [--builtin] [--json results.json]
 
-Needs the shared data folder (``$EXACTGRASP_DATA``, else ``../shared/data`` beside the
-repository; ``--data`` elsewhere); skips with a message when it is absent.
+``--builtin`` uses the README's first grasp instead: the built-in Barrett hand, fingers half
+closed, on the built-in 6 x 10 x 10 cm box (no data folder needed; building the hand from its
+model runs the geometry's shell check, whose numba kernels then compile in a cold run).
+
+Without ``--builtin``, needs the shared data folder (``$EXACTGRASP_DATA``, else
+``../shared/data`` beside the repository; ``--data`` elsewhere); skips with a message when it
+is absent.
 """
 
 from __future__ import annotations
@@ -45,6 +56,8 @@ datapath = importlib.util.module_from_spec(_DATAPATH)
 _DATAPATH.loader.exec_module(datapath)
 DATA = datapath.data_dir()
 GRASP = "barrett-grasps/noise/spray_bottle_base.json"
+#: What ``--builtin`` computes, as the README's first example.
+BUILTIN = "the README's grasp: built-in Barrett hand, 6 x 10 x 10 cm box"
 PHASES = ("import", "load grasp", "voxel", "exact")
 
 
@@ -97,7 +110,23 @@ def _record_compiles() -> list[dict]:
     return records
 
 
-def child(data: Path, order: list[str], functions: bool) -> dict:
+def builtin_grasp(eg):
+    """The README's first grasp: the built-in hand, fingers half closed, on the box."""
+    import numpy as np
+
+    hand = eg.hands.barrett({f"finger_{i}_med_joint": 0.6 for i in (1, 2, 3)})
+    pose = np.eye(4)
+    pose[:3, 3] = (0.0, 0.0, 0.125)
+    return eg.Grasp(hand, eg.objects.box((0.06, 0.1, 0.1)), pose, name="box")
+
+
+def phases(order: list[str], again: bool) -> list[str]:
+    """The phases a process times, in order (the whole process's wall time last)."""
+    backends = [name for backend in order for name in (backend, f"{backend} again")[: 1 + again]]
+    return [*PHASES[:2], *backends, "process"]
+
+
+def child(data: Path | None, order: list[str], functions: bool, again: bool = False) -> dict:
     """One process's phases (seconds), and its compile records if asked."""
     clock = [time.perf_counter(), time.process_time()]
     times, cpu = {}, {}
@@ -112,13 +141,17 @@ def child(data: Path, order: list[str], functions: bool) -> dict:
     import exactgrasp as eg
 
     lap("import")
-    grasp = eg.Grasp.from_file(data / GRASP)
+    grasp = builtin_grasp(eg) if data is None else eg.Grasp.from_file(data / GRASP)
     lap("load grasp")
     values = {}
     for backend in order:
         d = eg.compute_descriptor(grasp, "balanced", backend=backend, progress=False)
         lap(backend)
         values[backend] = float(d.values.sum())
+        if again:
+            d = eg.compute_descriptor(grasp, "balanced", backend=backend, progress=False)
+            lap(f"{backend} again")
+            assert float(d.values.sum()) == values[backend]
     return {"seconds": times, "cpu_seconds": cpu, "sums": values, "compiles": records}
 
 
@@ -126,7 +159,9 @@ def run_child(cache: Path, args: argparse.Namespace) -> dict:
     """Run `child` in a fresh process with ``NUMBA_CACHE_DIR=cache``."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), EXACTGRASP_NO_PROGRESS="1")
     cmd = [sys.executable, str(Path(__file__).resolve()), "--child", "--data", str(args.data)]
+    cmd += ["--builtin"] if args.builtin else []
     cmd += ["--order", ",".join(args.order)] + (["--functions"] if args.functions else [])
+    cmd += ["--again"] if args.again else []
     t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
     out = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, check=False)
     wall, r1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -172,15 +207,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeat", type=int, default=3, help="cold/warm pairs (median reported)")
     ap.add_argument("--order", type=lambda s: s.split(","), default=["voxel", "exact"])
     ap.add_argument("--functions", action="store_true", help="per-function compile seconds")
+    ap.add_argument("--again", action="store_true", help="each descriptor again, warm")
+    ap.add_argument("--builtin", action="store_true", help="the README's built-in grasp")
     ap.add_argument("--top", type=int, default=40, help="functions listed (default 40)")
     ap.add_argument("--data", type=Path, default=DATA)
     ap.add_argument("--json", type=Path, help="also write every run to this JSON file")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child:
-        print(json.dumps(child(args.data, args.order, args.functions)))
+        data = None if args.builtin else args.data
+        print(json.dumps(child(data, args.order, args.functions, args.again)))
         return 0
-    if not (args.data / GRASP).is_file():
+    if not args.builtin and not (args.data / GRASP).is_file():
         print(f"skipped: real data not found at {(args.data / GRASP).resolve()}")
         return 0
     runs = {"cold": [], "warm": []}
@@ -188,15 +226,26 @@ def main(argv: list[str] | None = None) -> int:
         with tempfile.TemporaryDirectory(prefix="numba-cache-") as cache:
             runs["cold"].append(run_child(Path(cache), args))
             runs["warm"].append(run_child(Path(cache), args))
-    phases = [*PHASES[:2], *args.order, "process"]
-    print(f"{args.data / GRASP}, balanced preset, defaults; median of {len(runs['cold'])}")
-    print(f"{'seconds':>10}" + "".join(f"{p:>12}" for p in phases))
+    columns = phases(args.order, args.again)
+    what = BUILTIN if args.builtin else args.data / GRASP
+    print(f"{what}, balanced preset, defaults; median of {len(runs['cold'])}")
+    print(f"{'seconds':>10}" + "".join(f"{p:>14}" for p in columns))
     for kind, got in runs.items():
-        med = [statistics.median(r["seconds"][p] for r in got) for p in phases]
-        print(f"{kind:>10}" + "".join(f"{m:>12.2f}" for m in med))
+        med = [statistics.median(r["seconds"][p] for r in got) for p in columns]
+        print(f"{kind:>10}" + "".join(f"{m:>14.3f}" for m in med))
     for kind, got in runs.items():
-        med = [statistics.median(r["cpu_seconds"][p] for r in got) for p in phases]
-        print(f"{kind + ' cpu':>10}" + "".join(f"{m:>12.2f}" for m in med))
+        med = [statistics.median(r["cpu_seconds"][p] for r in got) for p in columns]
+        print(f"{kind + ' cpu':>10}" + "".join(f"{m:>14.3f}" for m in med))
+    if args.again:
+        for backend in args.order:
+            for kind, got in runs.items():
+                ratios = [r["seconds"][backend] / r["seconds"][f"{backend} again"] for r in got]
+                print(
+                    f"{backend}, {kind}: first descriptor / the same again, median "
+                    f"{statistics.median(ratios):.1f}x (each run: "
+                    + ", ".join(f"{x:.1f}" for x in ratios)
+                    + ")"
+                )
     sums = {kind: [r["sums"] for r in got] for kind, got in runs.items()}
     same = all(s == sums["cold"][0] for got in sums.values() for s in got)
     print(f"descriptors identical in every run: {same}")

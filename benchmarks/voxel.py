@@ -10,8 +10,9 @@ library's defaults, as a user calls it::
 
 Timed in one run, each figure the median of ``--repeats`` runs:
 
-* first call: a fresh Python process per run (compiled kernels already in numba's disk
-  cache): the import, then ``Grasp.from_file`` and the descriptor;
+* first call: a fresh Python process per run (the voxel kernels compiled when the package was
+  built; numba kernels that remain already in numba's disk cache): the import, then
+  ``Grasp.from_file`` and the descriptor;
 * warm call: ``Grasp.from_file`` and the descriptor again in this process (what a second
   descriptor of the same hand and object costs), and the parts a first call builds, each
   afresh: reading the grasp, the hand grid, the object points, the hand's volume (the union
@@ -23,7 +24,9 @@ Timed in one run, each figure the median of ``--repeats`` runs:
   the second core is often busy, and the one-thread ratio does not depend on it.
 
 Seconds drift by 20 % and more on a shared machine; the ratios, timed side by side, are the
-stable figures.
+stable figures. The first lines say which kernels ran (Cython, or numba before the port:
+the script runs unchanged on either) and the figures go to ``--json`` for an A/B of two
+checkouts.
 
 Usage::
 
@@ -94,6 +97,18 @@ def first_calls(path: Path, repeats: int) -> dict[str, float]:
     return out
 
 
+def kernel_kind() -> str:
+    """``"Cython"`` for the counting kernel compiled with the package, ``"numba <version>"``
+    for a numba one."""
+    from exactgrasp.backends.voxel import kernel
+
+    if hasattr(kernel.count_inside, "py_func"):
+        import numba
+
+        return f"numba {numba.__version__}"
+    return "Cython"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--grasp", type=Path, default=GRASP_FILE, help="grasp JSON file")
@@ -104,7 +119,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"skipped: grasp file not found ({args.grasp}).")
         return 0
 
-    import numba
     import numpy as np
 
     import exactgrasp as eg
@@ -155,17 +169,18 @@ def main(argv: list[str] | None = None) -> int:
     )
 
     hand_triangles, object_triangles = (sum(len(f) for _, f in m) for m in (links, bodies))
+    kernels = kernel_kind()
     print(
         f"grasp {args.grasp.name}: hand {hand_triangles:,} triangles, object "
         f"{object_triangles:,}; {poses.shape[0]} x {poses.shape[1]} poses"
     )
     print(
         f"hand grid {hand.grid.shape}, {obj.n_interior:,} interior + {obj.n_surface:,} surface "
-        f"points; numba {numba.__version__}, {threads} threads by default, {os.cpu_count()} CPUs, "
+        f"points; {kernels} kernels, {threads} threads by default, {os.cpu_count()} CPUs, "
         f"load average {os.getloadavg()[0]:.2f}"
     )
     print(
-        f"numba counts == numpy counts: {same}; descriptor == estimate / hand volume: "
+        f"compiled counts == numpy counts: {same}; descriptor == estimate / hand volume: "
         f"{same_descriptor}"
     )
     print(f"\nmedians of {repeats} (seconds drift with the machine's load; ratios less so)")
@@ -190,6 +205,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         figures = {label.strip(): value for label, value in rows}
         figures.update(
+            kernels=kernels,
             ratio=ratio,
             ratio_one_thread=ratio_single,
             identical=same,

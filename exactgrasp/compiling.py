@@ -1,5 +1,6 @@
 """How the package's numba kernels are compiled: `kernel` for those Python calls, `inner` for
-those only other kernels call.
+those only other kernels call. (The winding-number and voxel kernels are compiled ahead of time
+with Cython when the package is built, and their ``.pyx`` sources join the cache key below.)
 
 Both are ``numba.njit`` with ``cache=True`` (compiled once per machine, then loaded from
 numba's on-disk cache) plus two rules that cut compile time without changing a result:
@@ -15,8 +16,9 @@ numba's on-disk cache) plus two rules that cut compile time without changing a r
   wrappers, not cached, and calls that.
 
 * the on-disk cache is keyed also on the source of every module in the kernels' packages
-  (`kernel_sources_digest`): numba checks only a function's own file, so a cached kernel
-  would otherwise keep the old code of a callee (or a constant) edited in another file.
+  (`kernel_sources_digest`, Python and Cython sources): numba checks only a function's own
+  file, so a cached kernel would otherwise keep the old code of a callee (or a constant)
+  edited in another file.
 
 Import this module's decorators in every kernel module; see "Cold start" in
 docs/performance.md for the measurements and the rules that keep compilation short (no
@@ -53,6 +55,7 @@ from numba.core.registry import CPUDispatcher
 __all__ = [
     "COMPILE_SECONDS",
     "KERNEL_PACKAGES",
+    "KERNEL_SOURCES",
     "NOTICE",
     "compile_seconds",
     "inner",
@@ -67,14 +70,19 @@ _NO_WRAPPERS = ("no_cpython_wrapper", "no_cfunc_wrapper")
 #: the constants compiled into them; with this module, their sources key the on-disk cache.
 KERNEL_PACKAGES = ("geometry", "backends/exact", "backends/voxel")
 
+#: The sources digested: Python modules, and the Cython kernels (installed beside their
+#: compiled extensions).
+KERNEL_SOURCES = ("*.py", "*.pyx")
+
 
 @cache
 def kernel_sources_digest() -> str:
-    """SHA-256 of this module and of every module in `KERNEL_PACKAGES`, in path order."""
+    """SHA-256 of this module and of every source (`KERNEL_SOURCES`) in `KERNEL_PACKAGES`, in
+    path order."""
     root = Path(__file__).resolve().parent
     files = [Path(__file__).resolve()]
     for folder in KERNEL_PACKAGES:
-        files += sorted((root / folder).rglob("*.py"))
+        files += sorted(p for pattern in KERNEL_SOURCES for p in (root / folder).rglob(pattern))
     digest = hashlib.sha256()
     for path in files:
         digest.update(path.relative_to(root).as_posix().encode())
@@ -177,7 +185,7 @@ def inner(**options: Any):
 #: Seconds each family of kernels takes to compile from an empty cache, fewest to most, as
 #: the notice announces them: the range measured on the reference 2-core machine, quiet to
 #: shared with other jobs (``benchmarks/cold_start.py``; "Cold start" in docs/performance.md).
-COMPILE_SECONDS = {"exact backend": (20, 45), "voxel estimator": (5, 10), "geometry": (2, 5)}
+COMPILE_SECONDS = {"exact backend": (20, 45), "geometry": (2, 5)}
 #: The notice, once per family and process.
 NOTICE = (
     "compiling exactgrasp kernels ({family}), first use only ({fewest}-{most} s on an idle "
@@ -188,7 +196,6 @@ NOTICE = (
 # prefix -> family, first match), else of the module that defines it.
 _FAMILIES = (
     ("exactgrasp.backends.exact", "exact backend"),
-    ("exactgrasp.backends.voxel", "voxel estimator"),
     ("exactgrasp.", "geometry"),
 )
 

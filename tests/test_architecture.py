@@ -235,8 +235,12 @@ def test_architecture_doc_names_every_room_and_only_real_modules():
     doc = (ROOT / "docs" / "architecture.md").read_text()
     for name in LAYERS:
         assert f"`{name}" in doc, f"docs/architecture.md does not describe room {name!r}"
-    for path in re.findall(r"`(exactgrasp/[\w/]+\.py)`", doc):
+    for path in re.findall(r"`(exactgrasp/[\w/]+\.pyx?)`", doc):
         assert (ROOT / path).exists(), f"docs/architecture.md names {path}, which does not exist"
+    # The compiled kernels' sources are modules too, named by their path.
+    for pyx in sorted(PACKAGE.rglob("*.pyx")):
+        path = pyx.relative_to(ROOT).as_posix()
+        assert f"`{path}`" in doc, f"docs/architecture.md does not name {path}"
     for dotted in re.findall(r"`(exactgrasp(?:\.\w+)+)`", doc):
         parts = dotted.split(".")
         assert any(".".join(parts[:k]) in MODULES for k in range(len(parts), 1, -1)), (
@@ -254,11 +258,21 @@ WORDS = re.compile(
     [
         *sorted(
             str(p.relative_to(ROOT))
-            for pattern in ("exactgrasp/**/*.py", "tests/*.py", "docs/**/*.md", "benchmarks/*.py")
+            for pattern in (
+                "exactgrasp/**/*.py",
+                "exactgrasp/**/*.pyx",
+                "tests/*.py",
+                "tests/*/*.py",
+                "docs/**/*.md",
+                "benchmarks/*.py",
+            )
             for p in ROOT.glob(pattern)
             if p.name != "test_architecture.py"
         ),
         "README.md",
+        "Makefile",
+        "meson.build",
+        "pyproject.toml",
     ],
 )
 def test_project_speaks_of_itself(path):

@@ -66,23 +66,27 @@ def test_kernel_sources_digest_covers_callee_and_constant_modules(tmp_path, monk
     root = Path(compiling.__file__).parent
     assert (root / "backends/exact/tolerances.py").is_file()
     assert (root / "geometry/predicates.py").is_file()
-    digest = compiling.kernel_sources_digest()
+    original = digest = compiling.kernel_sources_digest()
     assert len(digest) == 64 and digest == compiling.kernel_sources_digest()
-    # A copy of the package with one constant changed digests differently.
+    # A copy of the package digests the same; with a constant or a kernel source changed, not.
     import shutil
 
     copy = tmp_path / "exactgrasp"
     shutil.copytree(root, copy, ignore=shutil.ignore_patterns("__pycache__"))
-    tolerances = copy / "backends/exact/tolerances.py"
-    tolerances.write_text(tolerances.read_text() + "\n# edited\n")
     monkeypatch.setattr(compiling, "__file__", str(copy / "compiling.py"))
     compiling.kernel_sources_digest.cache_clear()
     try:
-        assert compiling.kernel_sources_digest() != digest
+        assert compiling.kernel_sources_digest() == digest
+        # A constant of a Python module, then a compiled kernel's Cython source.
+        for edited in ("backends/exact/tolerances.py", "geometry/_winding.pyx"):
+            (copy / edited).write_text((copy / edited).read_text() + "\n# edited\n")
+            compiling.kernel_sources_digest.cache_clear()
+            assert compiling.kernel_sources_digest() != digest
+            digest = compiling.kernel_sources_digest()
     finally:
         monkeypatch.undo()
         compiling.kernel_sources_digest.cache_clear()
-    assert compiling.kernel_sources_digest() == digest
+    assert compiling.kernel_sources_digest() == original
 
 
 def test_disk_caches_are_keyed_on_the_version_and_the_code_that_fills_them(tmp_path):

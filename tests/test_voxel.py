@@ -250,7 +250,7 @@ def test_sphere_cap_overlap_and_convergence(box_hand):
     assert estimate_volumes(box_hand, full, pose)[0] == pytest.approx(exact, rel=0.05)
 
 
-def test_numba_and_numpy_counts_are_identical():
+def test_compiled_and_numpy_counts_are_identical():
     hand = hand_occupancy(
         [sphere(1.0, subdivisions=3), box_arrays([0.5, -0.3, -0.3], [1.8, 0.3, 0.3])], 60
     )
@@ -290,7 +290,7 @@ def test_point_tree_partitions_the_points_by_kind():
 
 
 @pytest.mark.parametrize("hand_resolution", [40, 200])
-def test_numba_and_numpy_counts_agree_across_the_grid_border(hand_resolution):
+def test_compiled_and_numpy_counts_agree_across_the_grid_border(hand_resolution):
     # Poses that put the object across every face of the hand grid, and fine grids whose
     # tables tile several cells together.
     hand = hand_occupancy(

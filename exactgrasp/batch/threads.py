@@ -3,8 +3,10 @@
 A batch worker runs one task per thread it was given, and each task computes on one thread;
 every library that keeps a thread pool of its own must then use one thread per task too:
 
-* numba (the voxel and exact kernels): `NUMBA_NUM_THREADS`, and
+* numba (the exact kernels): `NUMBA_NUM_THREADS`, and
   `exactgrasp.backends.base.thread_limit` around each row;
+* the voxel kernels (Cython, compiled with the package): Python threads, as many as
+  `exactgrasp.backends.base.thread_limit` allows around each row;
 * BLAS and OpenMP (numpy, scipy): `OMP_NUM_THREADS`, `OPENBLAS_NUM_THREADS`,
   `MKL_NUM_THREADS`, read when those libraries load, so set before the worker starts
   (`THREAD_ENV`, given to the local cluster's workers; see ``docs/batch.md`` for ``dask

@@ -7,7 +7,7 @@ surface, each standing for ``w_s``. For every pose the points inside the hand ar
 a batch worker). Each instance keeps its grids, points and hand volumes, keyed by the
 geometry's content; `exactgrasp.backends.registry.shared_backend` shares one instance per
 parameters in a process. Its own room loads inside the methods: the class and its
-parameters load without numba, for ``--help``.
+parameters load without the kernels and what they import, for ``--help``.
 """
 
 from __future__ import annotations
@@ -154,7 +154,7 @@ class VoxelBackend(Backend):
         Cached by this backend per ``grasp.hand_key`` (the hash of the hand's canonical
         geometry).
         """
-        from exactgrasp.backends.voxel import grids  # the kernels compile on first use
+        from exactgrasp.backends.voxel import grids
 
         return self._hand_grids.get(
             getattr(grasp, "hand_key", None),

@@ -5,7 +5,8 @@ The estimator adds points on the object's surface so that thin parts, which may 
 interior voxel centre, still register (the paper used MeshLab's Poisson-disk resampling). Here
 candidates are drawn uniformly by area from a seeded generator and accepted greedily, in the
 order drawn, when no accepted point lies closer than the spacing: a dart-throwing Poisson-disk
-set that is deterministic for a fixed seed.
+set that is deterministic for a fixed seed (`dart_throw`, compiled ahead of time from
+``_points.pyx``).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from exactgrasp.backends.defaults import VOXEL_GRID_RULE, VOXEL_SEED, VOXEL_SURFACE_WEIGHT
-from exactgrasp.compiling import kernel
+from exactgrasp.backends.voxel._points import dart_throw
 from exactgrasp.errors import BackendError
 
 #: Median number of samples in the authors' published ``*_P.ply`` files (14 objects).
@@ -105,72 +106,6 @@ def poisson_disk_surface(
     )
     keep = dart_throw(candidates, float(spacing))
     return candidates[keep]
-
-
-# Cells of the sampler's grid per candidate at most: the grid is dense, and cells grow beyond
-# one spacing (still correct, only slower per lookup) when a sparse extent would need more.
-_CELLS_PER_CANDIDATE = 8
-
-
-@kernel()
-def dart_throw(points, spacing):
-    """Indices of the points accepted in order when not closer than `spacing` to an accepted one.
-
-    Parameters
-    ----------
-    points : numpy.ndarray, shape (n, 3), float64
-        Candidates, in the order they are considered (n >= 1).
-    spacing : float
-        Least distance between accepted points (the points' length units).
-
-    Returns
-    -------
-    numpy.ndarray, shape (k,), int64
-        Increasing indices into `points`.
-    """
-    n = points.shape[0]
-    lower = np.empty(3)
-    extent = np.empty(3)
-    for d in range(3):
-        lower[d] = points[:, d].min()
-        extent[d] = points[:, d].max() - lower[d]
-    # A conflicting point lies in one of the 27 cells around a candidate's own when cells are
-    # at least one spacing wide.
-    side = spacing
-    while (extent[0] / side + 3) * (extent[1] / side + 3) * (extent[2] / side + 3) > (
-        _CELLS_PER_CANDIDATE * n + 27
-    ):
-        side *= 1.25
-    # One empty layer of cells all round, so that neighbours need no bounds test.
-    nx, ny, nz = int(extent[0] / side) + 3, int(extent[1] / side) + 3, int(extent[2] / side) + 3
-    heads = np.full(nx * ny * nz, -1, np.int32)
-    chain = np.full(n, -1, np.int32)
-    accepted = np.zeros(n, np.bool_)
-    limit2 = spacing * spacing
-    for p in range(n):
-        cx = int((points[p, 0] - lower[0]) / side) + 1
-        cy = int((points[p, 1] - lower[1]) / side) + 1
-        cz = int((points[p, 2] - lower[2]) / side) + 1
-        clash = False
-        for dx in range(-1, 2):
-            for dy in range(-1, 2):
-                for dz in range(-1, 2):
-                    q = heads[((cx + dx) * ny + cy + dy) * nz + cz + dz]
-                    while q != -1 and not clash:
-                        d2 = 0.0
-                        for d in range(3):
-                            diff = points[p, d] - points[q, d]
-                            d2 += diff * diff
-                        if d2 < limit2:
-                            clash = True
-                        q = chain[q]
-        if clash:
-            continue
-        accepted[p] = True
-        own = (cx * ny + cy) * nz + cz
-        chain[p] = heads[own]
-        heads[own] = p
-    return np.nonzero(accepted)[0]
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,156 @@
+"""The build: meson.build installs every file of the package, compiles every Cython kernel with
+the flags that keep numba's rounding, and the kernels' sources follow the house rules.
+
+The kernels themselves are checked against the numba kernels' results in
+``tests/test_kernel_goldens.py``; building and installing a wheel is described in
+``docs/building.md``.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+import exactgrasp
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "exactgrasp"
+#: What a folder of the package may hold that is not installed from it.
+NOT_INSTALLED = {"meson.build"}
+PYX = sorted(PACKAGE.rglob("*.pyx"))
+MAX_LINES, MAX_FUNCTION_LINES = 400, 80
+
+
+def folders() -> list[Path]:
+    return [PACKAGE, *sorted(p for p in PACKAGE.rglob("*") if p.is_dir() and not ignored(p))]
+
+
+def ignored(path: Path) -> bool:
+    return any(part == "__pycache__" or part.startswith(".") for part in path.parts)
+
+
+def listed(folder: Path) -> tuple[set[str], set[str], set[str]]:
+    """Files installed, extension modules built and subfolders entered by a meson.build."""
+    text = (folder / "meson.build").read_text()
+    sources = re.search(r"py\.install_sources\(\s*\[(.*?)\]", text, re.S)
+    files = set(re.findall(r"'([^']+)'", sources.group(1))) if sources else set()
+    modules = set(re.findall(r"py\.extension_module\(\s*'(\w+)',\s*'(\w+\.pyx)'", text))
+    assert all(name + ".pyx" == source for name, source in modules), modules
+    return files, {source for _, source in modules}, set(re.findall(r"subdir\('(\w+)'\)", text))
+
+
+@pytest.mark.parametrize("folder", folders(), ids=lambda p: str(p.relative_to(ROOT)))
+def test_meson_installs_every_file_of_the_package(folder):
+    files, extensions, subfolders = listed(folder)
+    present = {p.name for p in folder.iterdir() if p.is_file() and not ignored(p)}
+    present = {name for name in present if not name.endswith((".so", ".pyd", ".c", ".pyc"))}
+    assert files == present - NOT_INSTALLED, f"{folder}/meson.build: add or drop files"
+    assert extensions == {name for name in present if name.endswith(".pyx")}
+    assert subfolders == {p.name for p in folder.iterdir() if p.is_dir() and not ignored(p)}
+
+
+def test_package_data_is_installed():
+    files, _, _ = listed(PACKAGE)
+    assert "py.typed" in files
+    assert "grasp-file.schema.json" in listed(PACKAGE / "grasp")[0]
+
+
+def test_kernels_are_compiled_without_contraction_or_fast_math():
+    text = (ROOT / "meson.build").read_text()
+    assert "'-ffp-contract=off', '-fno-fast-math'" in text
+    for pyx in PYX:
+        build = (pyx.parent / "meson.build").read_text()
+        block = re.search(rf"'{pyx.stem}',\s*'{pyx.name}',\s*c_args: (\w+)", build)
+        assert block and block.group(1) == "kernel_c_args", pyx
+
+
+def test_versions_and_build_backend_agree():
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert project["build-system"]["build-backend"] == "mesonpy"
+    requires = " ".join(project["build-system"]["requires"])
+    assert "meson-python" in requires and "Cython" in requires
+    meson = re.search(r"version: '([^']+)'", (ROOT / "meson.build").read_text()).group(1)
+    assert meson == project["project"]["version"] == exactgrasp.__version__
+
+
+def test_the_kernels_are_compiled_extensions_and_need_no_numba():
+    code = (
+        "import sys\n"
+        "from exactgrasp.geometry import winding\n"
+        "from exactgrasp.backends.voxel import kernel, points, grids\n"
+        "import exactgrasp.geometry._winding as w, exactgrasp.backends.voxel._kernel as k\n"
+        "print(w.__file__, k.__file__, type(winding.winding_number).__name__)\n"
+        "print('numba' in sys.modules)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT
+    ).stdout.split()
+    assert all(path.endswith((".so", ".pyd")) for path in out[:2]), out
+    assert out[2] == "cython_function_or_method" and out[3] == "False"
+
+
+def functions(text: str) -> list[tuple[str, int]]:
+    """(name, lines) of every top-level function of a Cython source."""
+    lines = text.splitlines()
+    starts = [
+        i for i, line in enumerate(lines) if re.match(r"(def|cdef|cpdef)\s[^=]*?\w+\(", line)
+    ]
+    found = []
+    for i in starts:
+        end = next(
+            (j for j in range(i + 1, len(lines)) if lines[j][:1] not in ("", " ", ")")), len(lines)
+        )
+        while not lines[end - 1].strip():
+            end -= 1
+        found.append((re.match(r"[^(]*?(\w+)\(", lines[i]).group(1), end - i))
+    return found
+
+
+@pytest.mark.parametrize("pyx", PYX, ids=lambda p: str(p.relative_to(ROOT)))
+def test_cython_kernels_follow_the_house_rules(pyx):
+    text = pyx.read_text()
+    assert len(text.splitlines()) <= MAX_LINES, f"{pyx.name}: more than {MAX_LINES} lines"
+    # Directives, then the module docstring.
+    assert re.match(r"(# cython: .*\n)+\"\"\"\S", text), f"{pyx.name}: no module docstring"
+    directives = " ".join(re.findall(r"# cython: (.*)", text))
+    for directive in ("boundscheck=False", "wraparound=False", "cdivision=True"):
+        assert directive in directives, f"{pyx.name}: {directive}"
+    # A variant compiled with other flags includes its source whole, and defines nothing.
+    included = re.findall(r'^include "(\w+\.pyx)"$', text, re.M)
+    if included:
+        assert all((pyx.parent / name).is_file() for name in included), included
+        assert not functions(text), f"{pyx.name}: a variant defines nothing of its own"
+        return
+    found = functions(text)
+    assert found, pyx.name
+    long = [(name, n) for name, n in found if n > MAX_FUNCTION_LINES]
+    assert not long, f"{pyx.name}: functions over {MAX_FUNCTION_LINES} lines: {long}"
+    for name, _ in found:
+        body = text.split(f"{name}(", 1)[1]
+        assert '"""' in body.split("\n\n\n", 1)[0], f"{pyx.name}: {name} has no docstring"
+    for public in re.findall(r"^def (\w+)\(", text, re.M):
+        if not public.startswith("_"):
+            doc = text.split(f"def {public}(", 1)[1].split('"""')[1]
+            sections = ("Parameters\n    ----------", "Returns\n    -------")
+            assert any(h in doc for h in sections), f"{pyx.name}: {public} (numpydoc)"
+    # The GIL is released where the kernels loop.
+    assert "with nogil:" in text and "noexcept nogil" in text
+
+
+def test_the_function_rule_measures_functions():
+    text = 'cdef int f(int a) noexcept nogil:\n    """x"""\n    return a\n\n\ndef g(\n    b,\n):\n'
+    text += '    """y"""\n' + "    b += 1\n" * 3 + "\n\ncdef struct S:\n    int a\n"
+    assert functions(text) == [("f", 3), ("g", 7)]
+
+
+def test_make_installs_the_build_requirements_first():
+    makefile = (ROOT / "Makefile").read_text()
+    deps = re.search(r"^BUILD_DEPS := (.*)$", makefile, re.M).group(1)
+    requires = tomllib.loads((ROOT / "pyproject.toml").read_text())["build-system"]["requires"]
+    assert re.findall(r'"([^"]+)"', deps) == [*requires, "ninja"]
+    assert "--no-build-isolation -e" in makefile
