@@ -37,7 +37,11 @@ REPAIR_HINT = (
 
 
 def to_manifold(
-    vertices: np.ndarray, faces: np.ndarray, name: str = "mesh", fix: str | None = None
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    name: str = "mesh",
+    fix: str | None = None,
+    face_ids: bool = False,
 ) -> manifold3d.Manifold:
     """A manifold3d solid from arrays, or a `MeshError` naming the mesh.
 
@@ -50,6 +54,11 @@ def to_manifold(
         The mesh, in messages (``"hand link 3"``).
     fix : str, optional
         How to fix a mesh manifold3d refuses, in messages; default `REPAIR_HINT`.
+    face_ids : bool
+        Give each triangle its index as manifold3d's face id: every triangle of the solid and
+        of any boolean with it then lies in the input triangle its ``face_id`` names (no two
+        triangles merged, as manifold3d merges coplanar ones of one face id). Default: face ids
+        left to manifold3d.
 
     Returns
     -------
@@ -82,6 +91,7 @@ def to_manifold(
         manifold3d.Mesh64(
             vert_properties=np.array(V, dtype=np.float64, order="C"),
             tri_verts=np.array(F, dtype=np.uint64, order="C"),
+            face_id=np.arange(len(F), dtype=np.uint64) if face_ids else None,
         )
     )
     status = solid.status()

@@ -89,18 +89,22 @@ class ExactBackend(Backend):
             ),
         )
 
-    def intersector_of(self, hand_links: list, object_bodies: list) -> ExactIntersector:
+    def intersector_of(
+        self, hand_links: list, object_bodies: list, faces: bool = False
+    ) -> ExactIntersector:
         """A new `ExactIntersector` of meshes with this backend's options (not kept).
 
         Parameters
         ----------
         hand_links, object_bodies : list of (V (n, 3) float64, F (m, 3) int)
             As `ExactIntersector` takes them.
+        faces : bool
+            As `ExactIntersector` takes it: moments per face of either mesh.
         """
         # Here, not above: the class and its parameters load without numba, for ``--help``.
         from exactgrasp.backends.exact.intersector import ExactIntersector
 
-        return ExactIntersector(hand_links, object_bodies, options=self.options)
+        return ExactIntersector(hand_links, object_bodies, options=self.options, faces=faces)
 
     def volumes(self, grasp: Grasp, poses: np.ndarray) -> np.ndarray:
         """Exact volume of hand ∩ moved object per pose, in cubed canonical units."""

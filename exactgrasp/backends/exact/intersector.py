@@ -46,7 +46,7 @@ from exactgrasp.backends.exact.culling import (
 from exactgrasp.backends.exact.extrapolate import extrapolated
 from exactgrasp.backends.exact.grids import build_grid, cell_order, grid_cell, morton_order
 from exactgrasp.backends.exact.moment_sums import empty_moment_tables, moment_tables
-from exactgrasp.backends.exact.moments import face_origins, shift_moments
+from exactgrasp.backends.exact.moments import face_sources, original_ids, shift_moments
 from exactgrasp.backends.exact.options import ExactOptions, check_options
 from exactgrasp.backends.exact.pose import pose_volumes
 from exactgrasp.backends.exact.prepare import (
@@ -136,6 +136,10 @@ class ExactIntersector:
     options : ExactOptions, optional
         The options `options.check_options` already checked (an `ExactBackend`'s), used
         instead of ``broadphase``, ``n_jobs`` and ``tuning``, not checked again.
+    faces : bool
+        Moments per face instead of per link (`volume_moments`): one row per face of the
+        hand's union, then one per face of the object's, each face of either union lying in
+        the input face `face_sources` names (manifold3d face ids, `moments.face_sources`).
 
     Attributes
     ----------
@@ -174,6 +178,11 @@ class ExactIntersector:
     areas : float
         Both unions' surface areas, summed (in the bound of `extrapolate`, and of the boolean
         reference in `gradients.boolean_volume_moments`).
+    face_sources : (numpy.ndarray (m, 2), numpy.ndarray (m_o, 2)) or None
+        With ``faces``: the (link, face of that link's input) of each hand face as the kernel
+        numbers them, and the (body, face) of each object face; else None.
+    moment_rows : int
+        Rows of moments per pose: the links, or with ``faces`` the hand's and object's faces.
     """
 
     def __init__(
@@ -184,6 +193,7 @@ class ExactIntersector:
         n_jobs: int | None = defaults.EXACT_N_JOBS,
         *,
         options: ExactOptions | None = None,
+        faces: bool = False,
         **tuning: Any,
     ):
         if options is None:
@@ -196,17 +206,20 @@ class ExactIntersector:
         self.origin = bounds_centre(hand_links)
         # Each link its own manifold3d original, so that the faces of the union and of any
         # boolean with it say which link they come from (`moments`).
-        links = [s.as_original() for s in solids(shifted(hand_links, self.origin), "hand link")]
-        self.link_ids = [int(s.original_id()) for s in links]
+        # With ``faces`` each triangle keeps its index as its face id (and its solid is already
+        # an original): then every face of a union lies in the input face it names.
+        links = solids(shifted(hand_links, self.origin), "hand link", faces)
+        links = links if faces else [s.as_original() for s in links]
+        self.link_ids = original_ids(links)
         self.hand_solid = union_solids(links)
-        self.object_solid = union_solids(
-            solids(shifted(object_bodies, self.origin), "object body")
-        )
+        bodies = solids(shifted(object_bodies, self.origin), "object body", faces)
+        self.object_solid = union_solids(bodies)
         self.hand_volume = float(self.hand_solid.volume())
         self.object_volume = float(self.object_solid.volume())
         AV, AF = mesh_arrays(self.hand_solid)
         # The link of each face, in the order `cell_order` gives the faces.
-        face_link = face_origins(self.hand_solid, self.link_ids)[morton_order(AV[AF].mean(1))]
+        hand_src = face_sources(self.hand_solid, self.link_ids)[morton_order(AV[AF].mean(1))]
+        face_link = np.ascontiguousarray(hand_src[:, 0])
         BV, BF = mesh_arrays(self.object_solid)
         # Cells scale with each mesh (units-free); see defaults.EXACT_CELLS_PER_EXTENT.
         hand_cell = grid_cell(AV, tuning.get("hand_cell"), "hand_cell")
@@ -224,8 +237,13 @@ class ExactIntersector:
         self.hand_mesh, self.hand_tables = hand_tables(
             prepare_mesh(AV, AF), self.hand_grid, self.tiny
         )
+        self.face_sources, rows, start = None, len(self.link_ids), -1
+        if faces:
+            self.face_sources = (hand_src, face_sources(self.object_solid, original_ids(bodies)))
+            face_link, rows, start = np.arange(len(AF), dtype=np.int64), len(AF), len(AF)
+        self.moment_rows = rows + (len(BF) if faces else 0)
         self.moment_tables = moment_tables(
-            self.hand_mesh, self.hand_tables, face_link, len(self.link_ids)
+            self.hand_mesh, self.hand_tables, face_link, rows, start
         )
         self.object_mesh = prepare_mesh(BV, BF)
         self.object_tables = object_tables(self.object_mesh)
@@ -302,7 +320,7 @@ class ExactIntersector:
         ``with_moments``) of poses (k, 4, 4) in local coordinates; ``apart`` and ``crossing``
         (k,) from `broad_phase` cull, None does not."""
         n = len(poses)
-        links = len(self.link_ids) if with_moments else 0
+        links = self.moment_rows if with_moments else 0
         moments = np.zeros((n, links, 6))
         out = np.zeros(n)
         bounds = np.zeros(n)
@@ -342,7 +360,7 @@ class ExactIntersector:
         o, b = np.zeros(k), np.zeros(k)
         c = np.zeros(k, np.int64)
         st = np.zeros((k, N_STATS), np.int64)
-        mo = np.zeros((k, len(self.link_ids) if with_moments else 0, 6))
+        mo = np.zeros((k, self.moment_rows if with_moments else 0, 6))
         pose_volumes(
             np.ascontiguousarray(poses), self.hand_mesh, self.hand_tables, self.hand_grid,
             self.object_mesh, self.object_tables, self.object_grid, self.tiny, capacity,
@@ -432,7 +450,7 @@ class ExactIntersector:
         bounds = np.empty(n)
         codes = np.empty(n, np.int64)
         stats = np.empty((n, N_STATS), np.int64)
-        moments = np.empty((n, len(self.link_ids) if with_moments else 0, 6))
+        moments = np.empty((n, self.moment_rows if with_moments else 0, 6))
 
         def run(ix: np.ndarray):
             return self._chunk(

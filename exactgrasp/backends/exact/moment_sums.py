@@ -66,7 +66,9 @@ def _grouped(keys: np.ndarray, values: np.ndarray, n_links: int, n_groups: int):
     return start, np.ascontiguousarray(uniq % n_links, dtype=np.int64), sums
 
 
-def moment_tables(mesh, hand, face_link: np.ndarray, n_links: int) -> MomentTables:
+def moment_tables(
+    mesh, hand, face_link: np.ndarray, n_links: int, object_from: int = -1
+) -> MomentTables:
     """The hand's `tables.MomentTables`; also writes each face's link into
     ``hand.face_records[:, 18]`` (what the traced segments carry).
 
@@ -78,6 +80,9 @@ def moment_tables(mesh, hand, face_link: np.ndarray, n_links: int) -> MomentTabl
     face_link : numpy.ndarray, shape (m,) int64
         The link of each face of ``mesh``.
     n_links : int
+    object_from : int
+        The row from which the moments hold one row per object face (`object_moments`), or
+        -1 for none.
     """
     V, E, ET = mesh.vertices, mesh.edges, mesh.edge_faces
     unit = hand.planes[:, :3]
@@ -110,6 +115,7 @@ def moment_tables(mesh, hand, face_link: np.ndarray, n_links: int) -> MomentTabl
         pstart,
         plink,
         np.ascontiguousarray(psums),
+        np.array([object_from], np.int64),
     )
 
 
@@ -124,6 +130,7 @@ def empty_moment_tables() -> MomentTables:
         np.zeros(1, np.int64),
         np.zeros(0, np.int64),
         np.zeros((0, 6)),
+        np.array([-1], np.int64),
     )
 
 

@@ -26,7 +26,14 @@ import numpy as np
 
 from exactgrasp.backends.exact.tolerances import BOOLEAN_ROUNDING
 
-__all__ = ["boolean_moments", "face_origins", "shift_moments", "triangle_moments"]
+__all__ = [
+    "boolean_moments",
+    "face_origins",
+    "face_sources",
+    "original_ids",
+    "shift_moments",
+    "triangle_moments",
+]
 
 
 def triangle_moments(V: np.ndarray, F: np.ndarray) -> np.ndarray:
@@ -120,3 +127,26 @@ def face_origins(solid: manifold3d.Manifold, link_ids: list[int]) -> np.ndarray:
     for r, oid in enumerate(np.asarray(mesh.run_original_id)):
         out[starts[r] : starts[r + 1]] = row[int(oid)]
     return out
+
+
+def face_sources(solid: manifold3d.Manifold, ids: list[int]) -> np.ndarray:
+    """The (solid, face) each triangle of ``solid.to_mesh64()`` comes from: the index into
+    ``ids`` of its run's original id, and its manifold3d face id (the input triangle's index
+    where the solid was built with `geometry.manifold.to_manifold`'s ``face_ids``), shape
+    (m, 2) int64."""
+    mesh = solid.to_mesh64()
+    out = np.empty((len(np.asarray(mesh.tri_verts)), 2), np.int64)
+    out[:, 0] = face_origins(solid, ids)
+    out[:, 1] = np.asarray(mesh.face_id, np.int64)
+    return out
+
+
+def original_ids(solids: list[manifold3d.Manifold]) -> list[int]:
+    """Each solid's manifold3d original id: its own, or where it has none (a solid built from a
+    mesh, not marked with ``as_original``) the one its triangles carry."""
+    return [
+        int(s.original_id())
+        if s.original_id() >= 0
+        else int(np.asarray(s.to_mesh64().run_original_id)[0])
+        for s in solids
+    ]

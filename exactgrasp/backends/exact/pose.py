@@ -4,7 +4,8 @@ Each pose runs the stages of "Method, per pose" in ``docs/exact-backend.md`` in 
 (`move_object`), near runs (`near_pass`), seeds (`seeds.object_edge_seeds`,
 `seeds.cotree_seeds`), pairs
 (`search.trace_pairs`), classify (`classify.classify_vertices`) and sum (`sums.volume_sum`),
-then, where asked, the derivatives' moments (`moment_sums.hand_moments`). The tables are
+then, where asked, the derivatives' moments (`moment_sums.hand_moments`, and per object face
+`object_moments.object_moments`). The tables are
 `tables`' named tuples.
 """
 
@@ -14,6 +15,7 @@ import numpy as np
 
 from exactgrasp.backends.exact.classify import classify_vertices
 from exactgrasp.backends.exact.moment_sums import hand_moments
+from exactgrasp.backends.exact.object_moments import object_moments
 from exactgrasp.backends.exact.search import trace_pairs
 from exactgrasp.backends.exact.seeds import (
     cotree_seeds,
@@ -221,7 +223,9 @@ def pose_volumes(
         The hand's moment tables, or empty ones (volumes only).
     moments : numpy.ndarray, shape (k, L, 6), float64
         Zeros, to which each `OK` pose with a non-zero volume adds the moments of each link's
-        boundary inside the object (`moment_sums.hand_moments`); L = 0: volumes only.
+        boundary inside the object (`moment_sums.hand_moments`) and, from row
+        ``mom.object_from[0]`` where that is not -1, of each object face's part inside the hand
+        (`object_moments.object_moments`); L = 0: volumes only.
 
     A pose whose pair table or seed buffer fills up (`GROW`) is computed again with both
     doubled: results do not depend on their sizes.
@@ -298,6 +302,12 @@ def pose_volumes(
                     W.hand_rec.edge, W.hand_rec.lam, W.nrec[0], scratch.multi, W.segments, ncross,
                     moments[ip],
                 )  # fmt: skip
+                if mom.object_from[0] >= 0:
+                    object_moments(
+                        object_mesh, scratch.object_V, scratch.object_N, scratch.object_status,
+                        W.object_count, W.object_rec.edge, W.object_rec.lam, W.nrec[1],
+                        scratch.multi, W.segments, ncross, moments[ip], mom.object_from[0],
+                    )  # fmt: skip
         codes[ip] = code
         stats[ip, STAT_PAIRS] = npairs
         stats[ip, STAT_CROSSING] = ncross

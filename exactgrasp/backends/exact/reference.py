@@ -72,12 +72,12 @@ def plain_error(volumes: np.ndarray, size: float, area: float) -> np.ndarray:
     return RTOL * np.abs(volumes) + BOOLEAN_SLACK * MANIFOLD_TOLERANCE * size * area
 
 
-def solids(meshes: list[Mesh], what: str) -> list:
-    """manifold3d solids of meshes (`geometry.manifold.to_manifold`), named ``"<what> <i>"``
-    in messages; refuses an empty list."""
+def solids(meshes: list[Mesh], what: str, face_ids: bool = False) -> list:
+    """manifold3d solids of meshes (`geometry.manifold.to_manifold`, with ``face_ids``), named
+    ``"<what> <i>"`` in messages; refuses an empty list."""
     if not meshes:
         raise BackendError(f"no {what} meshes given; pass at least one (V, F) pair.")
-    return [to_manifold(V, F, f"{what} {i}") for i, (V, F) in enumerate(meshes)]
+    return [to_manifold(V, F, f"{what} {i}", face_ids=face_ids) for i, (V, F) in enumerate(meshes)]
 
 
 def plain_volumes(hand_links: list[Mesh], object_bodies: list[Mesh], poses) -> np.ndarray:

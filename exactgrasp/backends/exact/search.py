@@ -37,6 +37,7 @@ from exactgrasp.backends.exact.tables import (
     SEGMENT_FACE,
     SEGMENT_LINK,
     SEGMENT_NORMAL,
+    SEGMENT_OBJECT_FACE,
     SEGMENT_P,
     SEGMENT_Q,
 )
@@ -454,6 +455,7 @@ def trace_pairs(
                     HF[ft, FACE_NORMAL + 2],
                     HF[ft, FACE_LINK],
                 )
+                segs[ncross, SEGMENT_OBJECT_FACE] = s
             seg += term
             run += abs(seg)
             segerr += terr + HF[ft, FACE_D_COST] + beta_s

@@ -277,6 +277,9 @@ class MomentTables(NamedTuple):
     #: (k, 6) float64: the summed moments, on that link's faces, of the whole edges from the
     #: part's vertices to higher-numbered ones.
     part_moments: np.ndarray
+    #: (1,) int64: the row from which the moments hold one row per object face (the object's
+    #: boundary inside the hand, face by face, `object_moments`), or -1: none.
+    object_from: np.ndarray
 
 
 class Crossings(NamedTuple):
@@ -302,9 +305,11 @@ POINT_COLUMNS = 7
 DIST_ERR = 3
 #: Columns of a traced segment (`Workspace.segments`, `SEGMENT_COLUMNS`): its hand face
 #: (`SEGMENT_FACE`), its start p (3) from `SEGMENT_P`, its end q (3) from `SEGMENT_Q`, the hand
-#: face's unit normal (3) from `SEGMENT_NORMAL` and link (`SEGMENT_LINK`).
+#: face's unit normal (3) from `SEGMENT_NORMAL` and link (`SEGMENT_LINK`), and the object face
+#: (`SEGMENT_OBJECT_FACE`).
 SEGMENT_FACE, SEGMENT_P, SEGMENT_Q, SEGMENT_NORMAL, SEGMENT_LINK = 0, 1, 4, 7, 10
-SEGMENT_COLUMNS = 11
+SEGMENT_OBJECT_FACE = 11
+SEGMENT_COLUMNS = 12
 
 
 class Workspace(NamedTuple):
@@ -345,8 +350,8 @@ class Workspace(NamedTuple):
     survivors: np.ndarray
     #: (pair table size, `SEGMENT_COLUMNS`) float64, or (0, `SEGMENT_COLUMNS`) for volumes only:
     #: per crossing pair of the pose, in the order traced, its hand face, its segment's ends p, q
-    #: (directed along ``n_t × n_s``), the hand face's unit normal and link: what the volume's
-    #: derivatives integrate over (`moment_sums`).
+    #: (directed along ``n_t × n_s``), the hand face's unit normal and link, and the object face:
+    #: what the volume's derivatives integrate over (`moment_sums`, `object_moments`).
     segments: np.ndarray
 
 
