@@ -235,7 +235,8 @@ def intersection_volume_gradients(
     volumes, ga, gb = _gradients(backend, (A, to_a), (B, to_b), arr.reshape(-1, 4, 4))
     gb = gb @ turn  # a grasp's object: by its own vertices, before the grasp pose
     shape = arr.shape[:-2]
-    volumes, ga, gb = volumes.reshape(shape), ga.reshape(*shape, -1, 3), gb.reshape(*shape, -1, 3)
+    volumes = volumes.reshape(shape)
+    ga, gb = ga.reshape(*shape, ga.shape[-2], 3), gb.reshape(*shape, gb.shape[-2], 3)
     if single:
         return VertexGradients(float(volumes), ga, gb)
     return VertexGradients(volumes, ga, gb)

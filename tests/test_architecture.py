@@ -40,8 +40,10 @@ LAYERS = {
     "separation": 6,
     "view": 6,
     "compare": 7,
+    "vertex_gradients": 7,
     "batch": 8,
     "report": 8,
+    "torch": 8,
     "evaluation": 9,
     "cli": 10,
 }
@@ -570,6 +572,7 @@ POSE_CHECKERS = {
     "exactgrasp.backends.voxel.backend",
     "exactgrasp.backends.voxel.kernel",  # `estimate_*`; the `*_of_checked` functions trust
     "exactgrasp.overlap",
+    "exactgrasp.vertex_gradients",
     "exactgrasp.cli.overlap",
 }
 
