@@ -20,11 +20,7 @@ import trimesh
 
 from exactgrasp.backends.base import check_poses
 from exactgrasp.backends.exact import ExactBackend
-from exactgrasp.backends.exact.face_gradients import (
-    corner_integrals,
-    face_moments,
-    scatter_corners,
-)
+from exactgrasp.backends.exact.face_gradients import side_gradients
 from exactgrasp.errors import MeshError
 from exactgrasp.geometry.intake import REPAIR, load_trimesh, unit_scale
 from exactgrasp.geometry.solid import Solid
@@ -260,7 +256,5 @@ def _gradients(backend: ExactBackend, A: tuple, B: tuple, poses: np.ndarray):
         volumes[at], rows = intersector.volume_moments(part)
         sides = ((A, hand_src, rows[:, :mh], None), (B, body_src, rows[:, mh:], part))
         for ((pairs, (targets, n)), src, side, moved), out in zip(sides, outs, strict=True):
-            moments = face_moments(side, src, pairs, moved)
-            for (V, F), m, target in zip(pairs, moments, targets, strict=True):
-                out[at] += scatter_corners(target, corner_integrals(V, F, m), n)
+            out[at] = side_gradients(side, src, pairs, moved, targets, n)
     return volumes, *outs

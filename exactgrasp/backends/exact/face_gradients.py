@@ -18,11 +18,16 @@ union (`ExactIntersector` with ``faces=True``), ``F = ∫ n dA = n A`` and
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse
 
 from exactgrasp.backends.exact.intersector import ExactIntersector
 
-__all__ = ["corner_integrals", "face_moments", "mesh_vertex_gradients", "scatter_corners"]
+__all__ = [
+    "corner_integrals",
+    "face_moments",
+    "mesh_vertex_gradients",
+    "scatter_corners",
+    "side_gradients",
+]
 
 
 def face_moments(
@@ -30,8 +35,9 @@ def face_moments(
     sources: np.ndarray,
     meshes: list[tuple[np.ndarray, np.ndarray]],
     poses: np.ndarray | None = None,
-) -> list[np.ndarray]:
-    """Per input face, the area and first moment of its part inside the other solid.
+) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Per input face that meets the other solid, the area and first moment of its part
+    inside it: only the rows that are not zero are read.
 
     Parameters
     ----------
@@ -48,40 +54,32 @@ def face_moments(
 
     Returns
     -------
-    list of numpy.ndarray, shape (k, m, 4)
-        Per mesh, per pose and face: the area (squared length units), then the first moment
-        ``∫ x dA`` (cubed length units) in the mesh's own frame.
+    list of (pose (t,) int, face (t,) int, moments (t, 4))
+        Per mesh, each (pose, face) met once: the area (squared length units), then the first
+        moment ``∫ x dA`` (cubed length units) in the mesh's own frame.
     """
-    rows = np.asarray(rows, dtype=np.float64)
-    F, M = rows[..., :3], rows[..., 3:]
+    # A face met has F = n A != 0 (three strided tests: cheaper than one over all six).
+    pose, row = np.nonzero((rows[..., 0] != 0.0) | (rows[..., 1] != 0.0) | (rows[..., 2] != 0.0))
+    F, M = rows[pose, row, :3], rows[pose, row, 3:]
     if poses is not None:
-        R, t = poses[:, None, :3, :3], poses[:, None, :3, 3]
+        R, t = poses[pose, :3, :3], poses[pose, :3, 3]
         # Into the mesh's frame: F_b = R^T F, M_b = R^T (M - t × F).
-        F = np.einsum("kcji,kcj->kci", np.broadcast_to(R, (*F.shape[:2], 3, 3)), F)
-        M = np.einsum(
-            "kcji,kcj->kci",
-            np.broadcast_to(R, (*M.shape[:2], 3, 3)),
-            M - np.cross(t, rows[..., :3]),
-        )
+        M = np.einsum("tji,tj->ti", R, M - np.cross(t, F))
+        F = np.einsum("tji,tj->ti", R, F)
     out = []
     for i, (V, Fc) in enumerate(meshes):
-        own = np.flatnonzero(sources[:, 0] == i)
-        face = sources[own, 1]
+        own = np.flatnonzero(sources[row, 0] == i)
+        face = sources[row[own], 1]
         a, b, c = V[Fc[face, 0]], V[Fc[face, 1]], V[Fc[face, 2]]
         N = np.cross(b - a, c - a)
         length = np.linalg.norm(N, axis=1)
         n = np.divide(N, length[:, None], out=np.zeros_like(N), where=length[:, None] > 0)
-        d = np.einsum("ij,ij->i", n, a)
-        area = np.einsum("kij,ij->ki", F[:, own], n)
-        first = np.cross(n, M[:, own]) + n * (d * area)[..., None]
-        values = np.concatenate([area[..., None], first], axis=-1)  # (k, r_i, 4)
-        gather = scipy.sparse.csr_matrix(
-            (np.ones(len(own)), (face, np.arange(len(own)))), shape=(len(Fc), len(own))
-        )
-        k = len(rows)
-        flat = values.transpose(1, 0, 2).reshape(len(own), k * 4)
-        summed = np.asarray(gather @ flat).reshape(len(Fc), k, 4)
-        out.append(summed.transpose(1, 0, 2))
+        area = np.einsum("ij,ij->i", F[own], n)
+        first = np.cross(n, M[own]) + n * (np.einsum("ij,ij->i", n, a) * area)[:, None]
+        keys, back = np.unique(pose[own] * len(Fc) + face, return_inverse=True)
+        summed = np.zeros((len(keys), 4))
+        np.add.at(summed, back.reshape(-1), np.column_stack([area, first]))
+        out.append((keys // len(Fc), keys % len(Fc), summed))
     return out
 
 
@@ -91,14 +89,16 @@ def corner_integrals(V: np.ndarray, F: np.ndarray, moments: np.ndarray) -> np.nd
 
     Parameters
     ----------
-    V, F : numpy.ndarray, shapes (n, 3) and (m, 3)
-        The mesh (length units).
-    moments : numpy.ndarray, shape (k, m, 4)
+    V : numpy.ndarray, shape (n, 3)
+        The mesh's vertices (length units).
+    F : numpy.ndarray, shape (t, 3)
+        The faces the moments are of (a face may come more than once, one per pose).
+    moments : numpy.ndarray, shape (t, 4)
         `face_moments`' area and first moment per face (the mesh's frame).
 
     Returns
     -------
-    numpy.ndarray, shape (k, m, 3, 3)
+    numpy.ndarray, shape (t, 3, 3)
         Squared length units: the derivative of the volume by each corner's vertex, face by
         face (a face of no area gives 0).
     """
@@ -107,24 +107,45 @@ def corner_integrals(V: np.ndarray, F: np.ndarray, moments: np.ndarray) -> np.nd
     nn = np.einsum("ij,ij->i", N, N)
     inv = np.divide(1.0, nn, out=np.zeros_like(nn), where=nn > 0)
     unit = N * np.sqrt(inv)[:, None]
-    A, P = moments[..., :1], moments[..., 1:]
-    out = np.empty((*moments.shape[:2], 3, 3))
+    A, P = moments[:, :1], moments[:, 1:]
+    out = np.empty((len(F), 3, 3))
     # φ_j(x) = ((z - y) × (x - y)) · N / |N|² for the corners (x_j, y, z) in turn.
     for j, (y, z) in enumerate(((b, c), (c, a), (a, b))):
-        w = np.einsum("kij,ij->ki", np.cross(z - y, P - A * y), N) * inv
-        out[:, :, j] = w[..., None] * unit
+        w = np.einsum("ij,ij->i", np.cross(z - y, P - A * y), N) * inv
+        out[:, j] = w[:, None] * unit
     return out
 
 
-def scatter_corners(F: np.ndarray, corners: np.ndarray, n: int) -> np.ndarray:
-    """Per-corner vectors (k, m, 3, 3) summed onto the vertices ``F`` names: (k, n, 3)."""
-    k = corners.shape[0]
-    index = (np.arange(k)[:, None] * n + F.reshape(-1)[None, :]).reshape(-1)
+def scatter_corners(
+    pose: np.ndarray, targets: np.ndarray, corners: np.ndarray, out: np.ndarray
+) -> None:
+    """Add per-corner vectors (t, 3, 3) of poses ``pose`` (t,) to ``out`` (k, n, 3) at the
+    vertices ``targets`` (t, 3) name."""
+    k, n = out.shape[:2]
+    index, back = np.unique((pose[:, None] * n + targets).reshape(-1), return_inverse=True)
     flat = corners.reshape(-1, 3)
-    out = np.empty((k * n, 3))
+    view = out.reshape(k * n, 3)
     for d in range(3):
-        out[:, d] = np.bincount(index, weights=flat[:, d], minlength=k * n)
-    return out.reshape(k, n, 3)
+        view[index, d] += np.bincount(back.reshape(-1), weights=flat[:, d], minlength=len(index))
+
+
+def side_gradients(
+    rows: np.ndarray,
+    sources: np.ndarray,
+    meshes: list[tuple[np.ndarray, np.ndarray]],
+    poses: np.ndarray | None,
+    targets: list[np.ndarray],
+    n: int,
+) -> np.ndarray:
+    """The volume's derivative by every vertex of one side, (k, n, 3) in squared length units:
+    `face_moments` of its meshes, their `corner_integrals`, added onto the vertex each corner
+    goes to (``targets``: per mesh (m_i, 3) indices among the ``n``; a body's in its own
+    frame)."""
+    out = np.zeros((len(rows), n, 3))
+    moments = face_moments(rows, sources, meshes, poses)
+    for (V, F), (pose, face, m), target in zip(meshes, moments, targets, strict=True):
+        scatter_corners(pose, target[face], corner_integrals(V, F[face], m), out)
+    return out
 
 
 def mesh_vertex_gradients(
@@ -132,7 +153,7 @@ def mesh_vertex_gradients(
     hand: list[tuple[np.ndarray, np.ndarray]],
     bodies: list[tuple[np.ndarray, np.ndarray]],
     poses: np.ndarray,
-) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray]]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Volumes and the volume's derivative by every vertex of the hand's links and of the
     object's bodies (each in its own frame), for poses (k, 4, 4).
 
@@ -148,9 +169,9 @@ def mesh_vertex_gradients(
     Returns
     -------
     volumes : numpy.ndarray, shape (k,)
-    hand_grads, body_grads : list of numpy.ndarray, shape (k, n_i, 3)
-        Per mesh, squared length units (volume per length of vertex motion); a body's in its
-        own frame (``R^T`` of the derivative by its moved vertex).
+    hand_grads, body_grads : numpy.ndarray, shapes (k, Σ n_hand, 3) and (k, Σ n_body, 3)
+        The meshes' vertices in order, squared length units (volume per length of vertex
+        motion); a body's in its own frame (``R^T`` of the derivative by its moved vertex).
     """
     volumes, rows = intersector.volume_moments(poses)
     hand_src, body_src = intersector.face_sources
@@ -160,11 +181,7 @@ def mesh_vertex_gradients(
         (hand, hand_src, rows[:, :mh], None),
         (bodies, body_src, rows[:, mh:], poses),
     ):
-        moments = face_moments(part, src, meshes, moved)
-        out.append(
-            [
-                scatter_corners(F, corner_integrals(V, F, m), len(V))
-                for (V, F), m in zip(meshes, moments, strict=True)
-            ]
-        )
+        offsets = np.cumsum([0] + [len(V) for V, _ in meshes])
+        targets = [F + o for (_, F), o in zip(meshes, offsets[:-1], strict=True)]
+        out.append(side_gradients(part, src, meshes, moved, targets, int(offsets[-1])))
     return volumes, out[0], out[1]

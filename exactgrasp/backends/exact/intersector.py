@@ -423,7 +423,10 @@ class ExactIntersector:
         ``poses.shape[:-2] + (L, 6)`` (L links, in input order; zero where the volume reads
         0). The derivatives they give are in `moments`."""
         result, moments = self._run(poses, None, True)
-        return result.volumes, shift_moments(moments, self.origin)
+        flat = moments.reshape(-1, 6)  # a fresh array; rows with F = 0 need no shift
+        live = np.flatnonzero(flat[:, :3].any(axis=1))
+        flat[live] = shift_moments(flat[live], self.origin)
+        return result.volumes, moments
 
     def _run(self, poses, progress, with_moments):
         """`intersect`'s result, and with ``with_moments`` the link moments (shape
