@@ -72,11 +72,8 @@ def main(argv: list[str] | None = None) -> int:
     poses[:, :3, 3] = rng.uniform(-0.01, 0.01, (args.poses, 3))
     backend = ExactBackend(n_jobs=args.jobs)
 
-    def volumes():
-        return eg.intersection_volume(grasp, poses=poses, backend=backend)
-
-    def gradients():
-        return eg.intersection_volume_gradients(grasp, poses=poses, backend=backend)
+    volumes = lambda: eg.intersection_volume(grasp, poses=poses, backend=backend)  # noqa: E731
+    gradients = lambda: eg.intersection_volume_gradients(grasp, poses=poses, backend=backend)  # noqa: E731
 
     v = volumes()
     r = gradients()

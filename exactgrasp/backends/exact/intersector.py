@@ -179,10 +179,8 @@ class ExactIntersector:
         Both unions' surface areas, summed (in the bound of `extrapolate`, and of the boolean
         reference in `gradients.boolean_volume_moments`).
     face_sources : (numpy.ndarray (m, 2), numpy.ndarray (m_o, 2)) or None
-        With ``faces``: the (link, face of that link's input) of each hand face as the kernel
-        numbers them, and the (body, face) of each object face; else None.
-    moment_rows : int
-        Rows of moments per pose: the links, or with ``faces`` the hand's and object's faces.
+        With ``faces``: the (link, input face) of each hand face in the kernel's order, and
+        the (body, face) of each object face. ``moment_rows``: the moments' rows per pose.
     """
 
     def __init__(
@@ -204,10 +202,8 @@ class ExactIntersector:
         # too (manifold3d's tolerance grows with the coordinates' magnitude), so that rounding
         # depends on the geometry's size, not on where it lies.
         self.origin = bounds_centre(hand_links)
-        # Each link its own manifold3d original, so that the faces of the union and of any
-        # boolean with it say which link they come from (`moments`).
-        # With ``faces`` each triangle keeps its index as its face id (and its solid is already
-        # an original): then every face of a union lies in the input face it names.
+        # Each link its own manifold3d original (a union's faces say their link, `moments`);
+        # with ``faces`` each triangle's face id is its index, which a union's faces keep.
         links = solids(shifted(hand_links, self.origin), "hand link", faces)
         links = links if faces else [s.as_original() for s in links]
         self.link_ids = original_ids(links)
@@ -219,7 +215,6 @@ class ExactIntersector:
         AV, AF = mesh_arrays(self.hand_solid)
         # The link of each face, in the order `cell_order` gives the faces.
         hand_src = face_sources(self.hand_solid, self.link_ids)[morton_order(AV[AF].mean(1))]
-        face_link = np.ascontiguousarray(hand_src[:, 0])
         BV, BF = mesh_arrays(self.object_solid)
         # Cells scale with each mesh (units-free); see defaults.EXACT_CELLS_PER_EXTENT.
         hand_cell = grid_cell(AV, tuning.get("hand_cell"), "hand_cell")
@@ -237,13 +232,8 @@ class ExactIntersector:
         self.hand_mesh, self.hand_tables = hand_tables(
             prepare_mesh(AV, AF), self.hand_grid, self.tiny
         )
-        self.face_sources, rows, start = None, len(self.link_ids), -1
-        if faces:
-            self.face_sources = (hand_src, face_sources(self.object_solid, original_ids(bodies)))
-            face_link, rows, start = np.arange(len(AF), dtype=np.int64), len(AF), len(AF)
-        self.moment_rows = rows + (len(BF) if faces else 0)
-        self.moment_tables = moment_tables(
-            self.hand_mesh, self.hand_tables, face_link, rows, start
+        self.face_sources, self.moment_rows, self.moment_tables = self._moment_layout(
+            hand_src, original_ids(bodies) if faces else None, len(BF)
         )
         self.object_mesh = prepare_mesh(BV, BF)
         self.object_tables = object_tables(self.object_mesh)
@@ -271,6 +261,17 @@ class ExactIntersector:
             "capacity": self.capacity,
         }
         self.areas = float(self.hand_solid.surface_area() + self.object_solid.surface_area())
+
+    def _moment_layout(self, hand_src: np.ndarray, body_ids: list | None, m_object: int):
+        """(`face_sources`, `moment_rows`, `moment_tables`): per link, or with the object's
+        bodies' ids (``faces``) one row per face of the hand's union, then of the object's."""
+        src, rows, start, link = None, len(self.link_ids), -1, hand_src[:, 0]
+        if body_ids is not None:
+            src = (hand_src, face_sources(self.object_solid, body_ids))
+            rows = start = len(hand_src)
+            link = np.arange(rows, dtype=np.int64)
+        tables = moment_tables(self.hand_mesh, self.hand_tables, link, rows, start)
+        return src, rows + (m_object if body_ids is not None else 0), tables
 
     def broad_phase(self, poses: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
         """What the broad phase knows of poses (k, 4, 4; local coordinates) before the kernel.

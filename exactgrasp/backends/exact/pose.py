@@ -188,6 +188,25 @@ def _vertex_bound(V):
     return np.sqrt(vmax) * ROUNDING_PAD
 
 
+@inner(nogil=True, error_model="numpy")
+def pose_moments(hand_mesh, hand, object_mesh, mom, scratch, ncross, G):
+    """Stage "moments" of a pose, after its volume: the moments of each link's boundary inside
+    the object (`moment_sums.hand_moments`) and, where ``mom.object_from[0]`` is not -1, of
+    each object face's part inside the hand from that row on (`object_moments.object_moments`),
+    added to ``G`` (L, 6)."""
+    W = scratch.work
+    hand_moments(
+        hand_mesh, hand, mom, scratch.hand_status, scratch.uniform, W.hand_count, W.hand_rec.edge,
+        W.hand_rec.lam, W.nrec[0], scratch.multi, W.segments, ncross, G,
+    )  # fmt: skip
+    if mom.object_from[0] >= 0:
+        object_moments(
+            object_mesh, scratch.object_V, scratch.object_N, scratch.object_status,
+            W.object_count, W.object_rec.edge, W.object_rec.lam, W.nrec[1], scratch.multi,
+            W.segments, ncross, G, mom.object_from[0],
+        )  # fmt: skip
+
+
 @kernel(nogil=True, error_model="numpy")
 def pose_volumes(
     poses, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap,
@@ -297,17 +316,7 @@ def pose_volumes(
             out[ip] = vol
             bounds[ip] = bound
             if code == OK and vol > 0.0 and moments.shape[1] > 0:
-                hand_moments(
-                    hand_mesh, hand, mom, scratch.hand_status, scratch.uniform, W.hand_count,
-                    W.hand_rec.edge, W.hand_rec.lam, W.nrec[0], scratch.multi, W.segments, ncross,
-                    moments[ip],
-                )  # fmt: skip
-                if mom.object_from[0] >= 0:
-                    object_moments(
-                        object_mesh, scratch.object_V, scratch.object_N, scratch.object_status,
-                        W.object_count, W.object_rec.edge, W.object_rec.lam, W.nrec[1],
-                        scratch.multi, W.segments, ncross, moments[ip], mom.object_from[0],
-                    )  # fmt: skip
+                pose_moments(hand_mesh, hand, object_mesh, mom, scratch, ncross, moments[ip])
         codes[ip] = code
         stats[ip, STAT_PAIRS] = npairs
         stats[ip, STAT_CROSSING] = ncross
