@@ -156,10 +156,10 @@ def _pair_code(V, F, ident, t, u, same, self_contacts, everything, X, out):
             return -1 if code == NO else code
         return UNSURE if meets_beyond_shared(V, F, ident, t, u, X) else -1
     if shared >= 2:
-        # Neighbours across an edge meet elsewhere only where they fold onto each other.
-        if same and self_contacts and meets_beyond_shared(V, F, ident, t, u, X):
-            return UNSURE
-        return -1
+        # Triangles on one edge meet elsewhere only where they fold onto each other.
+        if same and not self_contacts:
+            return -1
+        return UNSURE if meets_beyond_shared(V, F, ident, t, u, X) else -1
     code = _tri_tri(V, F, ident, t, u, shared == 1 and same, same, X, out)
     if code == NO:
         return -1

@@ -7,8 +7,9 @@ edges shared by four or more faces (two parts of a link touching along an edge),
 
 * counts and locates what keeps a mesh from being a cycle (`edge_defects`): edges of one face
   (holes) and edges used twice in one direction (neighbours that disagree on the outside);
-* drops faces that bound nothing: a face repeated with the same orientation is kept once, a
-  face and its reverse cancel (`drop_repeated_faces`);
+* drops faces that bound nothing: a face and its reverse cancel, a stray copy of a face is
+  kept once, coincident faces of closed shells are kept (`drop_repeated_faces`,
+  `bounding_faces`);
 * splits a mesh into shells (`split_shells`), drops unused vertices (`compact`) and joins
   meshes into one (`join_meshes`);
 * turns a cycle into an oriented 2-manifold without moving a vertex (`split_nonmanifold`):
@@ -28,6 +29,7 @@ from scipy.sparse.csgraph import connected_components
 
 __all__ = [
     "EdgeDefects",
+    "bounding_faces",
     "compact",
     "drop_repeated_faces",
     "edge_defects",
@@ -143,12 +145,15 @@ def edge_defects(vertices: np.ndarray, faces: np.ndarray) -> EdgeDefects:
     )
 
 
-def drop_repeated_faces(faces: np.ndarray) -> tuple[np.ndarray, int, int]:
+def drop_repeated_faces(faces: np.ndarray, repeats: bool = True) -> tuple[np.ndarray, int, int]:
     """Faces that bound something: repeats kept once, a face and its reverse cancelled.
 
     Parameters
     ----------
     faces : numpy.ndarray, shape (m, 3), int64
+    repeats : bool
+        Drop a face repeated with the same orientation down to one copy (a stray copy); with
+        False keep as many as do not cancel (coincident faces of closed shells).
 
     Returns
     -------
@@ -176,15 +181,57 @@ def drop_repeated_faces(faces: np.ndarray) -> tuple[np.ndarray, int, int]:
     down = counts - up
     net = up - down
     keep = np.zeros(len(F), bool)
-    # One face per group whose orientations do not cancel, of the winning orientation.
+    # One face per group whose orientations do not cancel (or |net| of them), of the winning
+    # orientation.
     winner = np.where(net > 0, True, False)
     candidate = (even == winner[group]) & (net[group] != 0)
-    first = np.full(len(counts), len(F))
-    np.minimum.at(first, group[candidate], np.flatnonzero(candidate))
-    keep[first[first < len(F)]] = True
+    if repeats:
+        first = np.full(len(counts), len(F))
+        np.minimum.at(first, group[candidate], np.flatnonzero(candidate))
+        keep[first[first < len(F)]] = True
+    else:
+        order = np.flatnonzero(candidate)
+        order = order[np.argsort(group[order], kind="stable")]
+        g = group[order]
+        start = np.searchsorted(g, g)  # first of each group in the sorted run
+        keep[order[np.arange(len(order)) - start < np.abs(net[g])]] = True
     cancelled = int(2 * np.minimum(up, down).sum())
     repeated = int(len(F) - keep.sum() - cancelled)
     return F[keep], repeated, cancelled
+
+
+def bounding_faces(
+    vertices: np.ndarray, faces: np.ndarray
+) -> tuple[np.ndarray, int, int, EdgeDefects]:
+    """The faces that bound the solid, and what keeps them from closing.
+
+    A face and its reverse cancel. A face repeated with the same orientation is kept as often
+    as it is when the surface closes with the copies (coincident faces of closed shells, such
+    as two boxes sharing a face: each copy counts in the winding number), else once (a stray
+    copy that leaves the surface open).
+
+    Parameters
+    ----------
+    vertices : numpy.ndarray, shape (n, 3), float64
+    faces : numpy.ndarray, shape (m, 3), int64
+
+    Returns
+    -------
+    faces : numpy.ndarray, shape (m', 3), int64
+        The input itself when nothing was dropped.
+    repeated, cancelled : int
+        As `drop_repeated_faces`.
+    defects : EdgeDefects
+        Of the faces returned.
+    """
+    G, _, cancelled = drop_repeated_faces(faces, repeats=False)
+    defects = edge_defects(vertices, G)
+    if defects.is_cycle:
+        return G, 0, cancelled, defects
+    H, repeated, cancelled = drop_repeated_faces(faces)
+    if not repeated:
+        return G, 0, cancelled, defects
+    return H, repeated, cancelled, edge_defects(vertices, H)
 
 
 def _wedge_pairs(
