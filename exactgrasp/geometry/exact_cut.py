@@ -46,6 +46,28 @@ _SIDE_BOUND = 1e-13
 _TINY = 1e-150
 
 
+class _Points:
+    """Homogeneous integer points: the input's vertices (converted when first used), then the
+    cut's."""
+
+    def __init__(self, ints: Integers) -> None:
+        self.ints = ints
+        self.given: dict[int, tuple] = {}
+        self.n = len(ints)
+        self.extra: list[tuple] = []
+
+    def __getitem__(self, g: int) -> tuple:
+        if g >= self.n:
+            return self.extra[g - self.n]
+        p = self.given.get(g)
+        if p is None:
+            p = self.given[g] = self.ints.point(g)
+        return p
+
+    def __len__(self) -> int:
+        return self.n + len(self.extra)
+
+
 class Arrangement:
     """The cut: exact points, and what each triangle holds.
 
@@ -53,7 +75,7 @@ class Arrangement:
     ----------
     ints : Integers
         The input's coordinates as integers.
-    points : list of tuple
+    points : sequence of tuple
         Homogeneous integer points: the input's vertices first, then the cut's.
     approx : list of list of float
         Each point rounded to float64, in the input's units.
@@ -61,11 +83,13 @@ class Arrangement:
         Input triangles (indices into ``points``).
     """
 
-    def __init__(self, V: np.ndarray, F: np.ndarray) -> None:
+    def __init__(self, V: np.ndarray, F: np.ndarray, involved: np.ndarray) -> None:
         self.ints = Integers(V)
-        self.points = list(self.ints.points)
+        self.points = _Points(self.ints)
         self.approx = np.asarray(V, dtype=np.float64).tolist()
-        self.index = {p: k for k, p in enumerate(self.points)}
+        # Every point the cut makes lies on a face in contact, so one equal to an input
+        # vertex is a corner of such a face: those corners are enough to find it.
+        self.index = {self.points[k]: k for k in involved.tolist()}
         self.faces = [tuple(f) for f in np.asarray(F, dtype=np.int64).tolist()]
         self.planes: dict[int, tuple] = {}
         self.segments: dict[int, set] = defaultdict(set)
@@ -81,7 +105,7 @@ class Arrangement:
         k = self.index.get(p)
         if k is None:
             k = len(self.points)
-            self.points.append(p)
+            self.points.extra.append(p)
             self.approx.append(self.ints.to_float(p))
             self.index[p] = k
         return k
@@ -295,14 +319,18 @@ def cut_exactly(vertices: np.ndarray, faces: np.ndarray):
     arrangement : Arrangement
         The exact points (input vertices first).
     tiles : list of (int, int, int, int)
-        ``(a, b, c, f)``: a triangle of the cut, as point indices oriented as input face f.
+        ``(a, b, c, f)``: a triangle of the cut, as point indices oriented as input face f,
+        for every face f that was tiled.
+    tiled : numpy.ndarray, shape (m,), bool
+        The faces replaced by their tiles; the others are kept as they are.
     n_cut : int
-        Input faces that were split.
+        Faces that were split.
     """
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
-    cut = Arrangement(V, F)
     t, u = find_contacts(V, F, np.arange(len(V)))
+    in_contact = np.unique(np.concatenate([t, u]))
+    cut = Arrangement(V, F, np.unique(F[in_contact]))
     for a, b in zip(t.tolist(), u.tolist(), strict=True):
         cut.meet(a, b)
     for f in list(cut.segments):
@@ -312,16 +340,23 @@ def cut_exactly(vertices: np.ndarray, faces: np.ndarray):
             for h in (f, *cut.partners[f]):
                 if g not in cut.faces[h]:
                     cut.place(g, h)
+    # Faces to tile: those in contact, and those with a point on one of their edges.
+    candidates = set(in_contact.tolist())
+    if cut.on_edge:
+        n = np.int64(len(V))
+        lo, hi = np.minimum(F, np.roll(F, -1, 1)), np.maximum(F, np.roll(F, -1, 1))
+        keys = np.array([a * n + b for a, b in cut.on_edge], np.int64)
+        candidates |= set(np.flatnonzero(np.isin(lo * n + hi, keys).any(1)).tolist())
     tiles: list[tuple[int, int, int, int]] = []
+    tiled = np.zeros(len(F), bool)
     n_cut = 0
-    for f, face in enumerate(cut.faces):
-        split = _tile(cut, f, face)
-        if split is None:
-            tiles.append((*face, f))
-        else:
+    for f in sorted(candidates):
+        split = _tile(cut, f, cut.faces[f])
+        if split is not None:
+            tiled[f] = True
             n_cut += len(split) > 1
             tiles += [(*tri, f) for tri in split]
-    return cut, tiles, n_cut
+    return cut, tiles, tiled, n_cut
 
 
 def _edge_points(cut: Arrangement, a: int, b: int) -> list[int]:

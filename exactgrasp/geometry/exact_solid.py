@@ -194,8 +194,10 @@ def solid_boundary(vertices: np.ndarray, faces: np.ndarray, around: int = 0, ins
     V = np.asarray(vertices, dtype=np.float64)
     welded, inverse = np.unique(V, axis=0, return_inverse=True)
     F = inverse.reshape(-1)[np.asarray(faces, dtype=np.int64)]
-    cut, tiles, n_cut = cut_exactly(welded, F)
+    cut, tiles, tiled, n_cut = cut_exactly(welded, F)
     G, counts, alone = _merged(tiles)
+    G = np.concatenate([F[~tiled], G])
+    counts = np.concatenate([np.ones(int((~tiled).sum()), np.int64), counts])
     n_patch, patch = _patches(G, len(cut.points))
     levels = _levels(cut, G, counts, patch, n_patch)
     report = {

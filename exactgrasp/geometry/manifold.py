@@ -29,6 +29,10 @@ __all__ = [
 
 MeshArrays = tuple[np.ndarray, np.ndarray]
 
+# How closely manifold3d's volume of a solid must match the divergence volume of its arrays:
+# its own simplification moves them by about its tolerance, 1e-12 of the coordinates.
+_VOLUME_AGREEMENT = 1e-8
+
 REPAIR_HINT = (
     "manifold3d needs a closed, consistently oriented surface; load the mesh with ",
     Fix("repair", True),
@@ -93,7 +97,32 @@ def to_manifold(
         )
     if solid.volume() <= 0:
         raise MeshError(f"{name} has non-positive volume (faces inward?); ", *fix_parts)
+    _check_volume_kept(solid, V, np.asarray(F, dtype=np.int64), name)
     return solid
+
+
+def _check_volume_kept(solid: manifold3d.Manifold, V: np.ndarray, F: np.ndarray, name: str):
+    """Refuse a mesh whose volume manifold3d does not keep: it simplifies features thinner
+    than its tolerance (about 1e-12 of the largest coordinate), and slivers that thin (left
+    where faces built to lie in one plane were rotated in floating point) can make that
+    simplification drop part of the solid."""
+    P = V - V.mean(0)
+    a, b, c = P[F[:, 0]], P[F[:, 1]], P[F[:, 2]]
+    cross = np.cross(b - a, c - a)
+    volume = float(np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0)
+    if abs(solid.volume() - volume) <= _VOLUME_AGREEMENT * abs(volume):
+        return
+    edges = np.linalg.norm(P[F[:, [1, 2, 0]]] - P[F], axis=2).max(1)
+    height = np.linalg.norm(cross, axis=1) / np.maximum(edges, 1e-300)
+    thinnest = int(np.argmin(height))
+    raise MeshError(
+        f"{name}: manifold3d reads a volume of {solid.volume():.9g} where the surface "
+        f"bounds {volume:.9g}: its simplification (tolerance {solid.get_tolerance():.2g}) "
+        f"drops slivers as thin as {height[thinnest]:.2g} (e.g. near "
+        f"{format_point(V[F[thinnest]].mean(0))}), left where faces built to lie in one plane "
+        "were rotated or moved in floating point; load the mesh in the frame where those "
+        "faces are exact (before rotating it), or merge its overlapping parts in a modeller."
+    )
 
 
 def union_solids(solids: Sequence[manifold3d.Manifold]) -> manifold3d.Manifold:

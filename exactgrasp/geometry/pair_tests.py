@@ -90,11 +90,27 @@ def _corner(mask, n, shared):
 
 
 @inner(nogil=True, error_model="numpy")
+def _rays_outside(X, p, a, b, c, d, i, j, bound):
+    """Are the rays from corner p through c and through d certainly outside the closed cone
+    from p spanned by a and b (an angle of a flat triangle, so under half a turn)? A corner
+    seen exactly at p (its triangle edge-on) adds no ray."""
+    s = _turn(X, p, a, b, i, j, bound)
+    for r in (c, d):
+        if X[r, i] == X[p, i] and X[r, j] == X[p, j]:
+            continue
+        if _turn(X, p, a, r, i, j, bound) != -s and _turn(X, p, r, b, i, j, bound) != -s:
+            return False
+    return True
+
+
+@inner(nogil=True, error_model="numpy")
 def _apart_but_shared_2d(X, mask_t, mask_u, shared):
     """Are triangles X[0:3] and X[3:6], sharing the corners in the bit masks (one or two),
     certainly apart but for those corners in a projection onto a coordinate plane that keeps
     one of them flat (so that meeting only there in projection means only there in space)?
-    Separating lines: the shared edge, or an edge through the shared corner."""
+    Across a shared edge: the free corners on opposite sides of it. At a shared corner: the
+    projections are cones from it, which meet beyond it only if a bounding ray of one lies in
+    the other (a cone seen edge-on is its rays)."""
     p = _corner(mask_t, 0, 1)
     r0, r1 = _corner(mask_t, 0, 0), _corner(mask_t, 1, 0)
     v0, v1 = _corner(mask_u, 0, 0) + 3, _corner(mask_u, 1, 0) + 3
@@ -102,7 +118,9 @@ def _apart_but_shared_2d(X, mask_t, mask_u, shared):
         ext = max(spread(X, i), spread(X, j))
         # Rounding of a 2D orientation determinant is below 4 eps times its terms, 2 L^2.
         bound = 1e-14 * ext * ext
-        if _turn(X, 0, 1, 2, i, j, bound) == 0 and _turn(X, 3, 4, 5, i, j, bound) == 0:
+        flat_t = _turn(X, 0, 1, 2, i, j, bound) != 0
+        flat_u = _turn(X, 3, 4, 5, i, j, bound) != 0
+        if not flat_t and not flat_u:
             continue
         if shared == 2:
             q = _corner(mask_t, 1, 1)
@@ -111,21 +129,11 @@ def _apart_but_shared_2d(X, mask_t, mask_u, shared):
             if s1 != 0 and s2 != 0 and s1 != s2:
                 return True
             continue
-        # One shared corner p: a line through it and a free corner of one triangle that
-        # has the other triangle's free corners strictly on its far side.
-        for k in range(4):
-            e, o, c, d = r0, r1, v0, v1
-            if k == 1:
-                e, o = r1, r0
-            elif k == 2:
-                e, o, c, d = v0, v1, r0, r1
-            elif k == 3:
-                e, o, c, d = v1, v0, r0, r1
-            side = _turn(X, p, e, o, i, j, bound)
-            if side == 0:
-                continue
-            if _turn(X, p, e, c, i, j, bound) == -side and _turn(X, p, e, d, i, j, bound) == -side:
-                return True
+        if flat_t and not _rays_outside(X, p, r0, r1, v0, v1, i, j, bound):
+            continue
+        if flat_u and not _rays_outside(X, p, v0, v1, r0, r1, i, j, bound):
+            continue
+        return True
     return False
 
 

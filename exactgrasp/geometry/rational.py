@@ -43,8 +43,6 @@ class Integers:
     ----------
     exponent : int
         Coordinates in the mesh's units are the integers times ``2 ** exponent``.
-    points : list of tuple
-        ``(X, Y, Z, 1)`` per vertex.
     """
 
     def __init__(self, vertices: np.ndarray) -> None:
@@ -53,12 +51,16 @@ class Integers:
         # mantissa * 2**53 is an integer for every float (subnormals included).
         nonzero = mantissa != 0
         self.exponent = int((power[nonzero] - 53).min()) if nonzero.any() else 0
-        shift = np.where(nonzero, power - 53 - self.exponent, 0)
-        digits = (mantissa * 2.0**53).astype(np.int64)
-        self.points = [
-            (int(a) << int(s), int(b) << int(t), int(c) << int(u), 1)
-            for (a, b, c), (s, t, u) in zip(digits.tolist(), shift.tolist(), strict=True)
-        ]
+        self._shift = np.where(nonzero, power - 53 - self.exponent, 0)
+        self._digits = (mantissa * 2.0**53).astype(np.int64)
+
+    def __len__(self) -> int:
+        return len(self._digits)
+
+    def point(self, k: int) -> tuple:
+        """Vertex k as ``(X, Y, Z, 1)``."""
+        (a, b, c), (s, t, u) = self._digits[k].tolist(), self._shift[k].tolist()
+        return (a << s, b << t, c << u, 1)
 
     def to_float(self, p: tuple) -> list[float]:
         """The point ``p`` in the mesh's units, each coordinate correctly rounded."""

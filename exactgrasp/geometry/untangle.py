@@ -194,16 +194,21 @@ def _float_cut(Vc, Fc, around: int):
     return Vk, Fk, n_cut, flipped
 
 
-def cut_cluster(parts, around: int) -> tuple[np.ndarray, np.ndarray, bool]:
+def cut_cluster(
+    parts, around: int, uncertain: bool = False
+) -> tuple[np.ndarray, np.ndarray, bool]:
     """The boundary of the solid inside a group of shells that cross or touch one another:
     their surfaces cut along every contact, and the patches between winding numbers 1 and 0,
     counting the ``around`` of the shells that hold the group. Cut in floating point where
-    every crossing is certain, else in exact arithmetic; also returns whether the exact cut
-    was needed."""
+    every crossing is certain, else (or with ``uncertain``: contacts are known that
+    floating-point signs cannot decide) in exact arithmetic; also returns whether the exact
+    cut was used."""
     V, F = join_meshes(parts)
-    _, label = split_shells(F, len(V))
-    t, u, code, _ = crossing_pairs(V, F, label)
-    if not (code == UNSURE).any():
+    if not uncertain:
+        _, label = split_shells(F, len(V))
+        t, u, code, _ = crossing_pairs(V, F, label)
+        uncertain = bool((code == UNSURE).any())
+    if not uncertain:
         try:
             layers, _ = winding_layers(V, F, t, u)
             return (*_solid_layer(layers, around), False)
