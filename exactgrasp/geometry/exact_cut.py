@@ -18,8 +18,8 @@ signs cannot decide.
    point; each point is then added to every triangle and edge it lies on, so that a segment
    common to two triangles is split at the same points in both.
 4. **Tiling.** Each triangle with points or segments is tiled by its constrained Delaunay
-   triangulation (`exactgrasp.geometry.triangulation`), which two coplanar triangles share
-   on their overlap. A zero-area triangle is fanned over the points on its edges.
+   triangulation (`exactgrasp.geometry.exact_tiles`), which two coplanar triangles share on
+   their overlap. A zero-area triangle is fanned over the points on its edges.
 
 The cut points stay exact throughout; `exactgrasp.geometry.exact_solid` rounds them once, at
 the end.
@@ -29,13 +29,12 @@ from __future__ import annotations
 
 from collections import defaultdict
 from fractions import Fraction
-from itertools import pairwise
 
 import numpy as np
 
 from exactgrasp.geometry.crossings import find_contacts
+from exactgrasp.geometry.exact_tiles import tile_face
 from exactgrasp.geometry.rational import Integers, orient2d, plane_of, point_on, side
-from exactgrasp.geometry.triangulation import constrained_delaunay
 
 __all__ = ["Arrangement", "cut_exactly"]
 
@@ -320,9 +319,10 @@ def cut_exactly(vertices: np.ndarray, faces: np.ndarray):
         The exact points (input vertices first).
     tiles : list of (int, int, int, int)
         ``(a, b, c, f)``: a triangle of the cut, as point indices oriented as input face f,
-        for every face f that was tiled.
+        for every face f in contact with another (which may be its own only tile).
     tiled : numpy.ndarray, shape (m,), bool
-        The faces replaced by their tiles; the others are kept as they are.
+        The faces given as tiles; the others meet no other face but at corners and edges
+        they share, and are kept as they are.
     n_cut : int
         Faces that were split.
     """
@@ -351,64 +351,11 @@ def cut_exactly(vertices: np.ndarray, faces: np.ndarray):
     tiled = np.zeros(len(F), bool)
     n_cut = 0
     for f in sorted(candidates):
-        split = _tile(cut, f, cut.faces[f])
-        if split is not None:
-            tiled[f] = True
-            n_cut += len(split) > 1
-            tiles += [(*tri, f) for tri in split]
+        split = tile_face(cut, f)
+        if split is None:
+            # Uncut, but it may coincide with a tile of a face it lies in: merged with it.
+            split = [cut.faces[f]]
+        tiled[f] = True
+        n_cut += len(split) > 1
+        tiles += [(*tri, f) for tri in split]
     return cut, tiles, tiled, n_cut
-
-
-def _edge_points(cut: Arrangement, a: int, b: int) -> list[int]:
-    """The points on edge a-b, in order from a to b."""
-    extra = cut.on_edge.get((min(a, b), max(a, b)))
-    if not extra:
-        return []
-    axis = cut.along(a, b)
-    rising = cut.coordinate(b, axis) > cut.coordinate(a, axis)
-    return sorted(extra, key=lambda g: cut.coordinate(g, axis), reverse=not rising)
-
-
-def _tile(cut: Arrangement, f: int, face) -> list[tuple[int, int, int]] | None:
-    """Face f's tiles (oriented as f), or None when nothing lies on it."""
-    rims = [_edge_points(cut, face[k], face[(k + 1) % 3]) for k in range(3)]
-    inner = cut.inside.get(f, set())
-    if not inner and not any(rims) and not cut.segments.get(f):
-        return None
-    if not any(cut.plane(f)[:3]):
-        # Zero area: a fan over the points of its rim, as thin as it is.
-        ring = [p for k in range(3) for p in (face[k], *rims[k])]
-        return [(ring[0], ring[k], ring[k + 1]) for k in range(1, len(ring) - 1)]
-    i, j, turn = cut.view(f)
-    corners = list(face) if turn > 0 else [face[0], face[2], face[1]]
-    order = corners + list(dict.fromkeys(p for rim in rims for p in rim)) + sorted(inner)
-    local = {g: k for k, g in enumerate(order)}
-    segments = []
-    for p, q in cut.segments.get(f, ()):
-        chain = _on_segment(cut, p, q, order, i, j)
-        segments += [(local[a], local[b]) for a, b in pairwise(chain)]
-    tris = constrained_delaunay(
-        [cut.points[g] for g in order],
-        [(cut.approx[g][i], cut.approx[g][j]) for g in order],
-        order,
-        segments,
-        i,
-        j,
-    )
-    out = [(order[a], order[b], order[c]) for a, b, c in tris]
-    return out if turn > 0 else [(a, c, b) for a, b, c in out]
-
-
-def _on_segment(cut: Arrangement, p: int, q: int, order, i: int, j: int) -> list[int]:
-    """Segment p-q's points among ``order``, from p to q."""
-    axis = cut.along(p, q, (i, j))
-
-    def at(g: int) -> Fraction:
-        return cut.coordinate(g, axis)
-
-    lo, hi = sorted((at(p), at(q)))
-    inner = [
-        g for g in order if g not in (p, q) and cut.orient(p, q, g, i, j) == 0 and lo < at(g) < hi
-    ]
-    rising = at(q) > at(p)
-    return [p, *sorted(inner, key=at, reverse=not rising), q]

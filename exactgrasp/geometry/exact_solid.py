@@ -25,6 +25,8 @@ at least 1, and returns that set's boundary as an oriented 2-manifold:
 from __future__ import annotations
 
 from collections import defaultdict
+from fractions import Fraction
+from functools import cmp_to_key
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -32,7 +34,8 @@ from scipy.sparse.csgraph import connected_components
 
 from exactgrasp.geometry.exact_cut import Arrangement, cut_exactly
 from exactgrasp.geometry.rational import centroid, orient2d, plane_of, side
-from exactgrasp.geometry.topology import edge_defects, split_nonmanifold
+from exactgrasp.geometry.topology import edge_defects
+from exactgrasp.geometry.wedges import split_nonmanifold
 
 __all__ = ["solid_boundary"]
 
@@ -224,5 +227,54 @@ def solid_boundary(vertices: np.ndarray, faces: np.ndarray, around: int = 0, ins
     out = local.reshape(-1, 3).astype(np.int64)
     if not edge_defects(points, out).is_cycle:
         raise ValueError("the kept faces do not close")  # a bug, never a user's mesh
-    W, H, _, _ = split_nonmanifold(points, out)
+    W, H, _, _ = split_nonmanifold(points, out, _exact_order(cut, used))
     return W, H, report
+
+
+def _exact_order(cut: Arrangement, used: np.ndarray):
+    """For `split_nonmanifold`: the faces' third corners ordered counter-clockwise around an
+    edge from the exact points (rounding may have made the edge too short to measure)."""
+
+    def exact(g: int) -> tuple[Fraction, ...]:
+        X, Y, Z, W = cut.points[int(used[g])]
+        return Fraction(X, W), Fraction(Y, W), Fraction(Z, W)
+
+    def around(V, third: np.ndarray, a: int, b: int) -> np.ndarray:
+        A, B = exact(a), exact(b)
+        d = [q - p for p, q in zip(A, B, strict=True)]
+        u = [[q - p for p, q in zip(A, exact(g), strict=True)] for g in third.tolist()]
+        dd = _dot(d, d)
+
+        def half(v) -> tuple[int, int]:
+            # 0: along the first corner, 1: the half-turn after it, 2: opposite, 3: the rest
+            s = _sign(_triple(u[0], v, d))
+            if s:
+                return (1, 0) if s > 0 else (3, 0)
+            return (0, 0) if _dot(v, u[0]) * dd - _dot(v, d) * _dot(u[0], d) > 0 else (2, 0)
+
+        def compare(i: int, j: int) -> int:
+            hi, hj = half(u[i]), half(u[j])
+            if hi != hj:
+                return -1 if hi < hj else 1
+            return -_sign(_triple(u[i], u[j], d))
+
+        return np.array(sorted(range(len(u)), key=cmp_to_key(compare)), np.int64)
+
+    return around
+
+
+def _dot(p, q):
+    return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
+
+
+def _triple(p, q, r):
+    """(p x q) . r"""
+    return (
+        (p[1] * q[2] - p[2] * q[1]) * r[0]
+        + (p[2] * q[0] - p[0] * q[2]) * r[1]
+        + (p[0] * q[1] - p[1] * q[0]) * r[2]
+    )
+
+
+def _sign(x) -> int:
+    return (x > 0) - (x < 0)

@@ -46,6 +46,12 @@ def _untangle_edges(V, F, name, actions):
     appended to ``actions``); an open or misoriented surface refused. Also returns how many
     coincident copies of faces closed shells share (kept for the exact cut)."""
     G, repeated, cancelled, defects = bounding_faces(V, F)
+    if not len(G):
+        raise MeshError(
+            f"{name}: its {len(F)} faces cancel in pairs (each on the same corners as its "
+            "reverse), so it bounds no solid; remove the reversed copies, or reverse the "
+            "inside-out shells."
+        )
     copies = 0 if G is F else len(G) - len(np.unique(np.sort(G, axis=1), axis=0))
     if repeated or cancelled:
         actions.append(
