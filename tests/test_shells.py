@@ -213,10 +213,10 @@ def test_crossing_exactly_on_an_edge_is_cut_exactly():
     text = messages[0]
     assert text.startswith(
         "folded.stl: cut the surface (8 vertices, 12 triangles), which crosses itself in 4 "
-        "triangle pairs and touches exactly at edges, corners or in a plane in 2 more (e.g. "
-        "near ("
+        "triangle pairs and touches itself exactly at edges, corners or in a plane in 2 more "
+        "(e.g. near ("
     )
-    assert "along the crossings in exact arithmetic (6 triangles split)" in text
+    assert "along every contact in exact arithmetic (6 triangles split)" in text
     # With a clean shell beside it, the message names the shell that was cut.
     v2, f2 = two_shells(box_arrays([3, 0, 0], [4, 1, 1]), folded_box())
     solid, messages = recorded(lambda: Solid(v2, f2))

@@ -89,8 +89,12 @@ class Arrangement:
         # Every point the cut makes lies on a face in contact, so one equal to an input
         # vertex is a corner of such a face: those corners are enough to find it.
         self.index = {self.points[k]: k for k in involved.tolist()}
-        self.faces = [tuple(f) for f in np.asarray(F, dtype=np.int64).tolist()]
+        F = np.asarray(F, dtype=np.int64)
+        self.faces = [tuple(f) for f in F.tolist()]
+        corners = np.asarray(V, dtype=np.float64)[F]
+        self.lo, self.hi = corners.min(1).tolist(), corners.max(1).tolist()
         self.planes: dict[int, tuple] = {}
+        self.views: dict[int, tuple[int, int, int]] = {}
         self.segments: dict[int, set] = defaultdict(set)
         self.found: dict[int, set] = defaultdict(set)
         self.partners: dict[int, set] = defaultdict(set)
@@ -120,10 +124,12 @@ class Arrangement:
     def view(self, t: int) -> tuple[int, int, int]:
         """Coordinates (i, j) that keep triangle t flat, and +1 (-1) when it turns
         counter-clockwise (clockwise) in them."""
-        pl = self.plane(t)
-        k = max(range(3), key=lambda a: abs(pl[a]))
-        i, j = _AXES[k]
-        return i, j, (1 if pl[k] > 0 else -1)
+        seen = self.views.get(t)
+        if seen is None:
+            pl = self.plane(t)
+            k = max(range(3), key=lambda a: abs(pl[a]))
+            seen = self.views[t] = (*_AXES[k], 1 if pl[k] > 0 else -1)
+        return seen
 
     def orient(self, p: int, q: int, r: int, i: int, j: int) -> int:
         """Exact sign of the turn p -> q -> r in the coordinates (i, j)."""
@@ -153,8 +159,28 @@ class Arrangement:
         return (s > 0) - (s < 0)
 
     def along(self, a: int, b: int, axes=(0, 1, 2)) -> int:
-        """The axis among ``axes`` along which points a and b differ most (exactly)."""
+        """An axis among ``axes`` along which points a and b differ: the one where their
+        rounded coordinates differ most (rounding keeps order, so a difference there is a
+        difference), else the one where they differ most exactly."""
+        A, B = self.approx[a], self.approx[b]
+        k = max(axes, key=lambda k: abs(B[k] - A[k]))
+        if B[k] != A[k]:
+            return k
         return max(axes, key=lambda k: abs(self.coordinate(b, k) - self.coordinate(a, k)))
+
+    def sort_along(self, points, a: int, b: int, axes=(0, 1, 2)) -> list[int]:
+        """``points`` (on the line through a and b) in order from a towards b, exactly:
+        by their rounded coordinates, or exact ones where two round alike."""
+        axis = self.along(a, b, axes)
+        rising = self.approx[b][axis] > self.approx[a][axis] or (
+            self.approx[b][axis] == self.approx[a][axis]
+            and self.coordinate(b, axis) > self.coordinate(a, axis)
+        )
+        points = list(points)
+        rounded = [self.approx[g][axis] for g in points]
+        if len(set(rounded)) == len(rounded):
+            return [g for _, g in sorted(zip(rounded, points, strict=True), reverse=not rising)]
+        return sorted(points, key=lambda g: self.coordinate(g, axis), reverse=not rising)
 
     def coordinate(self, g: int, axis: int) -> Fraction:
         """Point g's coordinate ``axis``, exactly (in integer units)."""
@@ -166,6 +192,10 @@ class Arrangement:
         face = self.faces[t]
         if g in face:
             return ("corner",)
+        x, lo, hi = self.approx[g], self.lo[t], self.hi[t]
+        pad = 4e-16 * max(abs(lo[0]), abs(lo[1]), abs(lo[2]), abs(hi[0]), abs(hi[1]), abs(hi[2]))
+        if any(x[k] < lo[k] - pad or x[k] > hi[k] + pad for k in range(3)):
+            return None
         if not any(self.plane(t)[:3]) or self.side_of(t, g) != 0:
             return None
         i, j, turn = self.view(t)
@@ -269,8 +299,8 @@ class Arrangement:
         if len(segs) < 2:
             return
         i, j, _ = self.view(t)
-        A = np.array(self.approx)
-        ends = A[np.array(segs)][:, :, [i, j]]
+        A = self.approx
+        ends = np.array([[[A[p][i], A[p][j]], [A[q][i], A[q][j]]] for p, q in segs])
         lo, hi = ends.min(1), ends.max(1)
         pad = 4e-16 * np.abs(ends).max() + 1e-300
         for a in range(len(segs)):

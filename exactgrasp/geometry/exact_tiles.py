@@ -9,7 +9,6 @@ zero-area face is fanned over the points on its edges. Orders along a line are e
 
 from __future__ import annotations
 
-from fractions import Fraction
 from itertools import pairwise
 from typing import TYPE_CHECKING
 
@@ -26,9 +25,7 @@ def _edge_points(cut: Arrangement, a: int, b: int) -> list[int]:
     extra = cut.on_edge.get((min(a, b), max(a, b)))
     if not extra:
         return []
-    axis = cut.along(a, b)
-    rising = cut.coordinate(b, axis) > cut.coordinate(a, axis)
-    return sorted(extra, key=lambda g: cut.coordinate(g, axis), reverse=not rising)
+    return cut.sort_along(extra, a, b)
 
 
 def tile_face(cut: Arrangement, f: int) -> list[tuple[int, int, int]] | None:
@@ -78,13 +75,16 @@ def tile_face(cut: Arrangement, f: int) -> list[tuple[int, int, int]] | None:
 def _on_segment(cut: Arrangement, p: int, q: int, order, i: int, j: int) -> list[int]:
     """Segment p-q's points among ``order``, from p to q."""
     axis = cut.along(p, q, (i, j))
+    ends = sorted((p, q), key=lambda g: cut.coordinate(g, axis))
 
-    def at(g: int) -> Fraction:
-        return cut.coordinate(g, axis)
+    def between(g: int) -> bool:
+        x, lo, hi = (cut.approx[k][axis] for k in (g, *ends))
+        if lo < x < hi:
+            return True  # rounding keeps order
+        if x < lo or x > hi:
+            return False
+        c = cut.coordinate(g, axis)
+        return cut.coordinate(ends[0], axis) < c < cut.coordinate(ends[1], axis)
 
-    lo, hi = sorted((at(p), at(q)))
-    inner = [
-        g for g in order if g not in (p, q) and cut.orient(p, q, g, i, j) == 0 and lo < at(g) < hi
-    ]
-    rising = at(q) > at(p)
-    return [p, *sorted(inner, key=at, reverse=not rising), q]
+    inner = [g for g in order if g not in (p, q) and cut.orient(p, q, g, i, j) == 0 and between(g)]
+    return [p, *cut.sort_along(inner, p, q, (i, j)), q]

@@ -143,40 +143,46 @@ def _cut_group(W, G, label, members, pairs, name, n_shells):
     mine = np.isin(label[t], members)
     n_cross = int((code[mine] == CROSS).sum())
     n_touch = int((code[mine] == UNSURE).sum())
-    what = ", ".join(str(int(m)) for m in members)
+    listed = ", ".join(str(int(m)) for m in members)
     where = (
-        f"shells {what} of {n_shells}"
+        f"shells {listed} of {n_shells}"
         if len(members) > 1
-        else (f"shell {what} of {n_shells}" if n_shells > 1 else "the surface")
+        else (f"shell {listed} of {n_shells}" if n_shells > 1 else "the surface")
     )
-    exact = ""
+    exact = False
     cut = None if n_touch else _float_cut(Vc, Fc, around)
     if cut is None:
         Vk, Fk, report = solid_boundary(Vc, Fc, around, inside_out=True)
         if not report["changed"]:
             return None
         n_cut, flipped = report["cut"], report["turned"]
-        exact = " in exact arithmetic"
+        exact = True
     else:
         Vk, Fk, n_cut, flipped = cut
     first = np.flatnonzero(mine)[0]
     near = point[first] if code[first] == CROSS else W[G[t[first]]].mean(0)
-    crossing = "crosses itself" if len(members) == 1 else "cross themselves and each other"
-    how = f"{n_cross} triangle pairs" if n_cross else ""
-    if n_touch:
-        how += (" and " if how else "") + (
-            f"touch{'es' if len(members) == 1 else ''} exactly at edges, corners or in a plane "
-            f"in {n_touch}{' more' if n_cross else ' triangle pairs'}"
-        )
-        if not n_cross:
-            crossing = "meets itself" if len(members) == 1 else "meet themselves and each other"
+    what = _contacts(len(members) == 1, n_cross, n_touch)
+    along = "along every contact in exact arithmetic" if exact else "along the crossings"
     action = (
-        f"cut {where} ({len(Vc)} vertices, {len(Fc)} triangles), which {crossing} in {how} "
-        f"(e.g. near {format_point(near)}), along the crossings{exact} ({n_cut} triangles "
-        f"split) into the boundary of the points of winding number >= 1"
+        f"cut {where} ({len(Vc)} vertices, {len(Fc)} triangles), which {what} (e.g. near "
+        f"{format_point(near)}), {along} ({n_cut} triangles split) into the boundary of the "
+        "points of winding number >= 1"
         + (", turned outward (the group is inside out)" if flipped else "")
     )
     return Vk, Fk, action
+
+
+def _contacts(one: bool, n_cross: int, n_touch: int) -> str:
+    """How a shell (``one``) or a group meets itself, in words."""
+    what = []
+    if n_cross:
+        crossing = "crosses itself" if one else "cross themselves and each other"
+        what.append(f"{crossing} in {n_cross} triangle pairs")
+    if n_touch:
+        touching = "touches itself" if one else "touch themselves and each other"
+        count = f"{n_touch} more" if n_cross else f"{n_touch} triangle pairs"
+        what.append(f"{touching} exactly at edges, corners or in a plane in {count}")
+    return " and ".join(what)
 
 
 def _float_cut(Vc, Fc, around: int):
