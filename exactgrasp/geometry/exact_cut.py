@@ -67,6 +67,45 @@ class _Points:
         return self.n + len(self.extra)
 
 
+class _Rounded:
+    """Each point's coordinates rounded to float64: the input's (as lists, made when first
+    used), then the cut's."""
+
+    def __init__(self, V: np.ndarray) -> None:
+        self.given = V
+        self.made: dict[int, list[float]] = {}
+        self.n = len(V)
+        self.extra: list[list[float]] = []
+
+    def __getitem__(self, g: int) -> list[float]:
+        if g >= self.n:
+            return self.extra[g - self.n]
+        x = self.made.get(g)
+        if x is None:
+            x = self.made[g] = self.given[g].tolist()
+        return x
+
+    def array(self) -> np.ndarray:
+        """All of them, (n, 3)."""
+        if not self.extra:
+            return self.given
+        return np.concatenate([self.given, np.array(self.extra, dtype=np.float64)])
+
+
+class _Faces:
+    """Input triangles as tuples of point indices, made when first used."""
+
+    def __init__(self, F: np.ndarray) -> None:
+        self.array = F
+        self.made: dict[int, tuple[int, int, int]] = {}
+
+    def __getitem__(self, t: int) -> tuple[int, int, int]:
+        face = self.made.get(t)
+        if face is None:
+            face = self.made[t] = tuple(self.array[t].tolist())
+        return face
+
+
 class Arrangement:
     """The cut: exact points, and what each triangle holds.
 
@@ -76,23 +115,21 @@ class Arrangement:
         The input's coordinates as integers.
     points : sequence of tuple
         Homogeneous integer points: the input's vertices first, then the cut's.
-    approx : list of list of float
-        Each point rounded to float64, in the input's units.
-    faces : list of (int, int, int)
+    approx : sequence of list of float
+        Each point rounded to float64, in the input's units (`_Rounded`).
+    faces : sequence of (int, int, int)
         Input triangles (indices into ``points``).
     """
 
     def __init__(self, V: np.ndarray, F: np.ndarray, involved: np.ndarray) -> None:
         self.ints = Integers(V)
         self.points = _Points(self.ints)
-        self.approx = np.asarray(V, dtype=np.float64).tolist()
+        self.approx = _Rounded(np.asarray(V, dtype=np.float64))
         # Every point the cut makes lies on a face in contact, so one equal to an input
         # vertex is a corner of such a face: those corners are enough to find it.
         self.index = {self.points[k]: k for k in involved.tolist()}
-        F = np.asarray(F, dtype=np.int64)
-        self.faces = [tuple(f) for f in F.tolist()]
-        corners = np.asarray(V, dtype=np.float64)[F]
-        self.lo, self.hi = corners.min(1).tolist(), corners.max(1).tolist()
+        self.faces = _Faces(np.asarray(F, dtype=np.int64))
+        self.boxes: dict[int, tuple] = {}
         self.planes: dict[int, tuple] = {}
         self.views: dict[int, tuple[int, int, int]] = {}
         self.segments: dict[int, set] = defaultdict(set)
@@ -109,9 +146,20 @@ class Arrangement:
         if k is None:
             k = len(self.points)
             self.points.extra.append(p)
-            self.approx.append(self.ints.to_float(p))
+            self.approx.extra.append(self.ints.to_float(p))
             self.index[p] = k
         return k
+
+    def box(self, t: int) -> tuple[list[float], list[float]]:
+        """Triangle t's bounding box, padded by the rounding of the points placed on it."""
+        box = self.boxes.get(t)
+        if box is None:
+            corners = [self.approx[v] for v in self.faces[t]]
+            lo = [min(c[k] for c in corners) for k in range(3)]
+            hi = [max(c[k] for c in corners) for k in range(3)]
+            pad = 4e-16 * max(map(abs, lo + hi))
+            box = self.boxes[t] = ([v - pad for v in lo], [v + pad for v in hi])
+        return box
 
     def plane(self, t: int) -> tuple:
         """Triangle t's plane (`exactgrasp.geometry.rational.plane_of`)."""
@@ -192,9 +240,8 @@ class Arrangement:
         face = self.faces[t]
         if g in face:
             return ("corner",)
-        x, lo, hi = self.approx[g], self.lo[t], self.hi[t]
-        pad = 4e-16 * max(abs(lo[0]), abs(lo[1]), abs(lo[2]), abs(hi[0]), abs(hi[1]), abs(hi[2]))
-        if any(x[k] < lo[k] - pad or x[k] > hi[k] + pad for k in range(3)):
+        x, (lo, hi) = self.approx[g], self.box(t)
+        if any(x[k] < lo[k] or x[k] > hi[k] for k in range(3)):
             return None
         if not any(self.plane(t)[:3]) or self.side_of(t, g) != 0:
             return None

@@ -78,7 +78,7 @@ class _Rays:
         self.cut = cut
         self.faces = faces
         self.counts = counts
-        corners = np.asarray(cut.approx, dtype=np.float64)[faces]
+        corners = cut.approx.array()[faces]
         self.lo, self.hi = corners.min(1), corners.max(1)
         self.planes: dict[int, tuple] = {}
 
@@ -223,7 +223,7 @@ def solid_boundary(vertices: np.ndarray, faces: np.ndarray, around: int = 0, ins
     if not len(out):
         return np.empty((0, 3)), np.empty((0, 3), np.int64), report
     used, local = np.unique(out.reshape(-1), return_inverse=True)
-    points = np.array([cut.approx[g] for g in used.tolist()], dtype=np.float64)
+    points = cut.approx.array()[used]
     out = local.reshape(-1, 3).astype(np.int64)
     if not edge_defects(points, out).is_cycle:
         raise ValueError("the kept faces do not close")  # a bug, never a user's mesh

@@ -13,7 +13,7 @@ import numpy as np
 
 from exactgrasp.compiling import inner, kernel
 
-__all__ = ["winding_inside_lattice", "winding_number", "winding_range_columns"]
+__all__ = ["winding_inside_lattice", "winding_number"]
 
 
 @kernel(nogil=True, error_model="numpy")
@@ -162,37 +162,3 @@ def winding_inside_lattice(triangles, nx, ny, nz):
             if winding >= 1:
                 inside[i, j, k] = 1
     return inside
-
-
-@kernel()
-def winding_range_columns(triangles, nx, ny):
-    """Least and greatest winding number met along the vertical lines through the integer
-    nodes of an nx x ny grid (triangles in index coordinates), as (int64, int64).
-
-    Along a line the winding number changes only where the line crosses the surface; it is
-    read between crossings of distinct heights, so two surfaces that touch (crossings of
-    equal height) never show a value that no region has.
-    """
-    starts, heights, signs = _crossings_by_column(triangles, nx, ny)
-    least = 0
-    most = 0
-    for c in range(nx * ny):
-        lo, hi = starts[c], starts[c + 1]
-        order = np.empty(hi - lo, np.int64)
-        for m in range(hi - lo):
-            x = heights[lo + m]
-            q = m
-            while q > 0 and heights[lo + order[q - 1]] < x:
-                order[q] = order[q - 1]
-                q -= 1
-            order[q] = m
-        winding = 0
-        m = 0
-        while m < hi - lo:
-            h = heights[lo + order[m]]
-            while m < hi - lo and heights[lo + order[m]] == h:
-                winding += signs[lo + order[m]]
-                m += 1
-            least = min(least, winding)
-            most = max(most, winding)
-    return least, most
