@@ -34,7 +34,16 @@ import numpy as np
 
 from exactgrasp.geometry.crossings import find_contacts
 from exactgrasp.geometry.exact_tiles import tile_face
-from exactgrasp.geometry.rational import Integers, orient2d, plane_of, point_on, side
+from exactgrasp.geometry.rational import (
+    ExactPoints,
+    FaceTuples,
+    Integers,
+    RoundedPoints,
+    orient2d,
+    plane_of,
+    point_on,
+    side,
+)
 
 __all__ = ["Arrangement", "cut_exactly"]
 
@@ -43,67 +52,6 @@ _AXES = ((1, 2), (2, 0), (0, 1))
 _ORIENT_BOUND = 1e-14
 _SIDE_BOUND = 1e-13
 _TINY = 1e-150
-
-
-class _Points:
-    """Homogeneous integer points: the input's vertices (converted when first used), then the
-    cut's."""
-
-    def __init__(self, ints: Integers) -> None:
-        self.ints = ints
-        self.given: dict[int, tuple] = {}
-        self.n = len(ints)
-        self.extra: list[tuple] = []
-
-    def __getitem__(self, g: int) -> tuple:
-        if g >= self.n:
-            return self.extra[g - self.n]
-        p = self.given.get(g)
-        if p is None:
-            p = self.given[g] = self.ints.point(g)
-        return p
-
-    def __len__(self) -> int:
-        return self.n + len(self.extra)
-
-
-class _Rounded:
-    """Each point's coordinates rounded to float64: the input's (as lists, made when first
-    used), then the cut's."""
-
-    def __init__(self, V: np.ndarray) -> None:
-        self.given = V
-        self.made: dict[int, list[float]] = {}
-        self.n = len(V)
-        self.extra: list[list[float]] = []
-
-    def __getitem__(self, g: int) -> list[float]:
-        if g >= self.n:
-            return self.extra[g - self.n]
-        x = self.made.get(g)
-        if x is None:
-            x = self.made[g] = self.given[g].tolist()
-        return x
-
-    def array(self) -> np.ndarray:
-        """All of them, (n, 3)."""
-        if not self.extra:
-            return self.given
-        return np.concatenate([self.given, np.array(self.extra, dtype=np.float64)])
-
-
-class _Faces:
-    """Input triangles as tuples of point indices, made when first used."""
-
-    def __init__(self, F: np.ndarray) -> None:
-        self.array = F
-        self.made: dict[int, tuple[int, int, int]] = {}
-
-    def __getitem__(self, t: int) -> tuple[int, int, int]:
-        face = self.made.get(t)
-        if face is None:
-            face = self.made[t] = tuple(self.array[t].tolist())
-        return face
 
 
 class Arrangement:
@@ -116,19 +64,19 @@ class Arrangement:
     points : sequence of tuple
         Homogeneous integer points: the input's vertices first, then the cut's.
     approx : sequence of list of float
-        Each point rounded to float64, in the input's units (`_Rounded`).
+        Each point rounded to float64, in the input's units (a `RoundedPoints`).
     faces : sequence of (int, int, int)
         Input triangles (indices into ``points``).
     """
 
     def __init__(self, V: np.ndarray, F: np.ndarray, involved: np.ndarray) -> None:
         self.ints = Integers(V)
-        self.points = _Points(self.ints)
-        self.approx = _Rounded(np.asarray(V, dtype=np.float64))
+        self.points = ExactPoints(self.ints)
+        self.approx = RoundedPoints(np.asarray(V, dtype=np.float64))
         # Every point the cut makes lies on a face in contact, so one equal to an input
         # vertex is a corner of such a face: those corners are enough to find it.
         self.index = {self.points[k]: k for k in involved.tolist()}
-        self.faces = _Faces(np.asarray(F, dtype=np.int64))
+        self.faces = FaceTuples(np.asarray(F, dtype=np.int64))
         self.boxes: dict[int, tuple] = {}
         self.planes: dict[int, tuple] = {}
         self.views: dict[int, tuple[int, int, int]] = {}

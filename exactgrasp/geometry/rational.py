@@ -10,7 +10,8 @@ found. The predicates here are exact signs of polynomials in those integers; the
 the float sign is within its error bound.
 
 Rounding happens once, at the end (`Integers.to_float`: each coordinate correctly rounded to
-the nearest float64).
+the nearest float64). `ExactPoints`, `RoundedPoints` and `FaceTuples` hold a mesh's points and
+faces for the cut, converted only where it looks.
 """
 
 from __future__ import annotations
@@ -20,7 +21,10 @@ from math import gcd
 import numpy as np
 
 __all__ = [
+    "ExactPoints",
+    "FaceTuples",
     "Integers",
+    "RoundedPoints",
     "centroid",
     "incircle",
     "normalized",
@@ -70,6 +74,67 @@ class Integers:
         # Integer true division rounds correctly, and the value stays in float range.
         den = W << -self.exponent
         return [c / den for c in (X, Y, Z)]
+
+
+class ExactPoints:
+    """Homogeneous integer points: the input's vertices (converted when first used), then the
+    cut's."""
+
+    def __init__(self, ints: Integers) -> None:
+        self.ints = ints
+        self.given: dict[int, tuple] = {}
+        self.n = len(ints)
+        self.extra: list[tuple] = []
+
+    def __getitem__(self, g: int) -> tuple:
+        if g >= self.n:
+            return self.extra[g - self.n]
+        p = self.given.get(g)
+        if p is None:
+            p = self.given[g] = self.ints.point(g)
+        return p
+
+    def __len__(self) -> int:
+        return self.n + len(self.extra)
+
+
+class RoundedPoints:
+    """Each point's coordinates rounded to float64: the input's (as lists, made when first
+    used), then the cut's."""
+
+    def __init__(self, V: np.ndarray) -> None:
+        self.given = V
+        self.made: dict[int, list[float]] = {}
+        self.n = len(V)
+        self.extra: list[list[float]] = []
+
+    def __getitem__(self, g: int) -> list[float]:
+        if g >= self.n:
+            return self.extra[g - self.n]
+        x = self.made.get(g)
+        if x is None:
+            x = self.made[g] = self.given[g].tolist()
+        return x
+
+    def array(self) -> np.ndarray:
+        """All of them, (n, 3)."""
+        if not self.extra:
+            return self.given
+        return np.concatenate([self.given, np.array(self.extra, dtype=np.float64)])
+
+
+class FaceTuples:
+    """Input triangles as tuples of point indices, made when first used."""
+
+    def __init__(self, F: np.ndarray) -> None:
+        self.array = F
+        self.made: dict[int, tuple[int, int, int]] = {}
+
+    def __getitem__(self, t: int) -> tuple[int, int, int]:
+        face = self.made.get(t)
+        if face is None:
+            face = self.made[t] = tuple(self.array[t].tolist())
+        return face
 
 
 def normalized(X: int, Y: int, Z: int, W: int) -> tuple:
