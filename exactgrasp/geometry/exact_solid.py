@@ -32,9 +32,10 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from exactgrasp.errors import MeshError
 from exactgrasp.geometry.exact_cut import Arrangement, cut_exactly
 from exactgrasp.geometry.rational import centroid, orient2d, plane_of, side
-from exactgrasp.geometry.topology import edge_defects
+from exactgrasp.geometry.topology import edge_defects, format_point
 from exactgrasp.geometry.wedges import split_nonmanifold
 
 __all__ = ["solid_boundary"]
@@ -167,7 +168,13 @@ def _levels(cut, faces, counts, patch, n_patch) -> np.ndarray:
     return levels
 
 
-def solid_boundary(vertices: np.ndarray, faces: np.ndarray, around: int = 0, inside_out=False):
+def solid_boundary(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    around: int = 0,
+    inside_out: bool = False,
+    name: str = "mesh",
+):
     """The boundary of the points of winding number >= 1 of a closed surface, exactly.
 
     Parameters
@@ -181,6 +188,8 @@ def solid_boundary(vertices: np.ndarray, faces: np.ndarray, around: int = 0, ins
     inside_out : bool
         When that solid is empty and ``around`` is 0, return instead the boundary of the
         points of winding number <= -1, facing out of them (an inside-out body, turned).
+    name : str
+        The mesh, in messages.
 
     Returns
     -------
@@ -192,6 +201,12 @@ def solid_boundary(vertices: np.ndarray, faces: np.ndarray, around: int = 0, ins
         ``cut`` (input faces split), ``changed`` (False when the input is returned),
         ``turned`` (the inside-out reading was used), ``levels`` (sorted distinct
         (behind, in front) winding numbers of the patches).
+
+    Raises
+    ------
+    MeshError
+        Patches made only of zero-area triangles, whose side no ray can decide, that the
+        boundary cannot close without.
     """
     V_in, F_in = vertices, faces
     V = np.asarray(vertices, dtype=np.float64)
@@ -225,8 +240,16 @@ def solid_boundary(vertices: np.ndarray, faces: np.ndarray, around: int = 0, ins
     used, local = np.unique(out.reshape(-1), return_inverse=True)
     points = cut.approx.array()[used]
     out = local.reshape(-1, 3).astype(np.int64)
-    if not edge_defects(points, out).is_cycle:
-        raise ValueError("the kept faces do not close")  # a bug, never a user's mesh
+    defects = edge_defects(points, out)
+    if not defects.is_cycle:
+        # Only patches of zero-area triangles, which no ray can ask, are left undecided.
+        raise MeshError(
+            f"{name}: zero-area triangles lie where its surface meets itself (the cut leaves "
+            f"{defects.open + defects.misoriented} edges unmatched, e.g. at "
+            f"{format_point(defects.open_at if defects.open else defects.misoriented_at)}), "
+            "so the exact cut cannot tell which side of the solid they are on; remove them "
+            "(e.g. MeshLab's 'Remove Zero Area Faces') and load the mesh again."
+        )
     W, H, _, _ = split_nonmanifold(points, out, _exact_order(cut, used))
     return W, H, report
 

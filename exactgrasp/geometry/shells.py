@@ -298,7 +298,9 @@ def _resolve_cluster(shells: _Shells, idx: np.ndarray, w: int, pair_labels, cros
         # Contacts that floating-point signs cannot decide are cut exactly, as is what a
         # union less a union cannot express.
         parts = [shells.parts[int(i)] for i in idx]
-        merged_v, merged_f, exactly = cut_cluster(parts, w, crossing < len(pair_labels))
+        merged_v, merged_f, exactly = cut_cluster(
+            parts, w, crossing < len(pair_labels), shells.name
+        )
         along = " in exact arithmetic" if exactly else ""
         if why:
             done = f"cut shells {shells.named(idx)} ({how}, {why}) along their crossings"

@@ -83,7 +83,7 @@ def untangle(V: np.ndarray, F: np.ndarray, name: str):
     W, G, copies = _untangle_edges(V, F, name, actions)
     if copies:
         # Shells sharing faces: the whole surface is cut exactly, coincident faces counted.
-        Vk, Fk, report = solid_boundary(W, G, 0, inside_out=True)
+        Vk, Fk, report = solid_boundary(W, G, 0, inside_out=True, name=name)
         if not len(Fk):
             raise MeshError(
                 f"{name}: its surface bounds no solid (its winding number is below 1 "
@@ -152,7 +152,7 @@ def _cut_group(W, G, label, members, pairs, name, n_shells):
     exact = False
     cut = None if n_touch else _float_cut(Vc, Fc, around)
     if cut is None:
-        Vk, Fk, report = solid_boundary(Vc, Fc, around, inside_out=True)
+        Vk, Fk, report = solid_boundary(Vc, Fc, around, inside_out=True, name=name)
         if not report["changed"]:
             return None
         n_cut, flipped = report["cut"], report["turned"]
@@ -207,7 +207,7 @@ def _float_cut(Vc, Fc, around: int):
 
 
 def cut_cluster(
-    parts, around: int, uncertain: bool = False
+    parts, around: int, uncertain: bool = False, name: str = "mesh"
 ) -> tuple[np.ndarray, np.ndarray, bool]:
     """The boundary of the solid inside a group of shells that cross or touch one another:
     their surfaces cut along every contact, and the patches between winding numbers 1 and 0,
@@ -226,7 +226,7 @@ def cut_cluster(
             return (*_solid_layer(layers, around), False)
         except UncertainCrossingError:
             pass
-    W, G, _ = solid_boundary(V, F, around)
+    W, G, _ = solid_boundary(V, F, around, name=name)
     return W, G, True
 
 
