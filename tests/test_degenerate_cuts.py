@@ -33,7 +33,7 @@ from tests.degenerate_palms import (
     union_of_boxes,
 )
 from tests.exact_reference import cgal_volume, rational_volume
-from tests.messy_meshes import joined
+from tests.messy_meshes import DENTED_VOLUME, dented_box, joined
 
 igl = pytest.importorskip("igl", reason="libigl (the dev extra) not installed")
 
@@ -112,6 +112,28 @@ def test_the_refused_palm_is_resolved():
     assert solid.volume == pytest.approx(cgal_volume(V, F), rel=1e-12)
     assert solid.volume == pytest.approx(1.0, rel=1e-12)
     assert "coincident faces, along every contact in exact arithmetic" in messages[0]
+
+
+def test_what_the_floating_point_cut_cannot_decide_is_cut_exactly(monkeypatch):
+    # A self-crossing shell whose crossings are all certain takes the floating-point cut; where
+    # that cut cannot decide (here made to fail as it does on a patch lying on another), the
+    # exact cut resolves the same solid.
+    from exactgrasp.errors import UncertainCrossingError
+    from exactgrasp.geometry import untangle
+
+    def undecided(*args):
+        raise UncertainCrossingError(
+            "a patch of the cut surface lies on another part of it", np.zeros(3)
+        )
+
+    V, F = dented_box()
+    float_solid, _ = resolved(V, F, "dented")
+    monkeypatch.setattr(untangle, "winding_layers", undecided)
+    solid, messages = resolved(V, F, "dented")
+    assert "along every contact in exact arithmetic" in messages[0]
+    assert solid.volume == pytest.approx(DENTED_VOLUME, rel=1e-12)
+    assert solid.volume == pytest.approx(float_solid.volume, rel=1e-12)
+    assert_clean(solid, "dented", 1e-12)
 
 
 def test_a_hand_with_a_degenerate_palm_loads(tmp_path):
