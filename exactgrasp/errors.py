@@ -195,7 +195,9 @@ class MeshError(ExactGraspError, ValueError):
 
 class UncertainCrossingError(MeshError):
     """A surface crosses or touches itself exactly at an edge or a corner, where floating-point
-    signs cannot tell how, so the crossing cannot be cut.
+    signs cannot tell how, so the floating-point cut cannot decide it. The resolution of
+    solids catches it and cuts in exact arithmetic instead (`exactgrasp.geometry.untangle`),
+    so it does not reach a caller of `exactgrasp.Solid`.
 
     Attributes
     ----------

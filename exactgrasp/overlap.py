@@ -73,8 +73,7 @@ def as_solid(
     ------
     MeshError
         For a form that is not accepted, or a mesh that bounds no solid (open, inconsistently
-        oriented, crossing itself exactly at an edge or a corner, flat, non-finite); the
-        message names ``name``.
+        oriented, faces that all cancel, flat, non-finite); the message names ``name``.
     """
     if isinstance(mesh, Solid):
         return mesh

@@ -17,6 +17,7 @@ from exactgrasp.geometry.shells import find_crossings, resolve_shells, split_she
 from exactgrasp.hands.frame import HandFrame
 from exactgrasp.hands.hand import Hand
 from tests.conftest import box_arrays
+from tests.exact_reference import cgal_volume
 
 # Two overlapping boxes: 0.5^3 + 0.5 * 0.35 * 0.4 - 0.25 * 0.35 * 0.3.
 A_LO, A_HI = (0.0, 0.0, 0.0), (0.5, 0.5, 0.5)
@@ -203,20 +204,24 @@ def folded_box():
     return v, f
 
 
-def test_crossing_exactly_on_an_edge_is_refused_with_where():
+def test_crossing_exactly_on_an_edge_is_cut_exactly():
     v, f = folded_box()
-    with pytest.raises(MeshError) as info:
-        Solid(v, f, name="folded.stl")
-    text = str(info.value)
+    solid, messages = recorded(lambda: Solid(v, f, name="folded.stl"))
+    assert solid.volume == pytest.approx(cgal_volume(v, f), rel=1e-12)
+    assert solid.volume == pytest.approx(7 / 27, rel=1e-12)
+    assert len(messages) == 1
+    text = messages[0]
     assert text.startswith(
-        "folded.stl: the surface (8 vertices, 12 triangles) crosses itself in 4 triangle pairs"
+        "folded.stl: cut the surface (8 vertices, 12 triangles), which crosses itself in 4 "
+        "triangle pairs and touches itself exactly at edges, corners or in a plane in 2 more "
+        "(e.g. near ("
     )
-    assert "cannot be cut with certainty" in text
-    assert "near (" in text and "MeshLab's 'Select Self Intersecting Faces'" in text
-    # With a clean shell beside it, the message names the bad shell.
+    assert "along every contact in exact arithmetic (6 triangles split)" in text
+    # With a clean shell beside it, the message names the shell that was cut.
     v2, f2 = two_shells(box_arrays([3, 0, 0], [4, 1, 1]), folded_box())
-    with pytest.raises(MeshError, match=r"shell 1 of 2 \(8 vertices, 12 triangles\) crosses"):
-        Solid(v2, f2)
+    solid, messages = recorded(lambda: Solid(v2, f2))
+    assert "cut shell 1 of 2 (8 vertices, 12 triangles)" in messages[0]
+    assert solid.volume == pytest.approx(1 + 7 / 27, rel=1e-12)
 
 
 def test_self_intersection_pairs_and_point():
@@ -335,49 +340,50 @@ def test_overlapping_islands_inside_a_cavity_are_merged():
 
 
 @pytest.mark.parametrize(
-    ("boxes", "why"),
+    ("boxes", "volume"),
     [
+        # Inside an outer box: an outward box crossed by a reversed one whose edges run
+        # exactly through the diagonals of the outward box's faces: 27 less the half of the
+        # reversed box that only the outer box holds (0.18).
         (
-            # Inside an outer box: an outward box crossed by a reversed one.
             [
                 ((0, 0, 0), (3, 3, 3), 1),
                 ((1, 1, 1), (2, 2, 2), 1),
                 ((1.5, 1.2, 1.2), (2.5, 1.8, 1.8), -1),
             ],
-            r"shells 1 \(8 vertices\), 2 \(8 vertices\) mix crossing outward and reversed shells "
-            r"inside another shell",
+            26.82,
         ),
+        # Two overlapping outward boxes, and a reversed one crossing both.
         (
-            # Two overlapping outward boxes, and a reversed one crossing both.
             [
                 ((0, 0, 0), (1, 1, 1), 1),
                 ((0.5, 0.1, 0.1), (1.5, 0.9, 0.9), 1),
                 ((0.8, 0.3, 0.3), (1.7, 0.7, 0.7), -1),
             ],
-            r"shells 0 \(8 vertices\), 1 \(8 vertices\), 2 \(8 vertices\) mix reversed shells "
-            r"with outward shells that overlap",
+            None,
         ),
     ],
     ids=["inside another shell", "overlapping outward shells"],
 )
-def test_combinations_not_resolved_are_refused_with_the_fix(boxes, why):
+def test_combinations_with_exact_contacts_are_cut_exactly(boxes, volume):
     v, f = two_shells(
         *(box_arrays(lo, hi) if s > 0 else reversed_box(lo, hi) for lo, hi, s in boxes)
     )
-    with pytest.raises(
-        MeshError,
-        match=rf"^combo: {why}; the solid they bound is not resolved here\. Make every body one "
-        r"outward closed shell .*Blender's Boolean modifier",
-    ):
-        Solid(v, f, name="combo")
+    solid, messages = recorded(lambda: Solid(v, f, name="combo"))
+    want = cgal_volume(v, f)
+    assert solid.volume == pytest.approx(want, rel=1e-12)
+    if volume is not None:
+        assert want == pytest.approx(volume, rel=1e-12)
+    assert len(messages) == 1 and "in exact arithmetic into the boundary" in messages[0]
 
 
 def test_repair_does_not_touch_a_closed_shell_that_crosses_itself():
     v, f = folded_box()
-    with pytest.raises(
-        MeshError, match=r"^folded\.stl: the surface .* crosses itself in 4 .*modeller"
-    ):
-        Solid(v, f, name="folded.stl", repair=True)
+    plain, _ = recorded(lambda: Solid(v, f, name="folded.stl"))
+    repaired, _ = recorded(lambda: Solid(v, f, name="folded.stl", repair=True))
+    assert repaired.repair_report is None
+    np.testing.assert_array_equal(repaired.vertices, plain.vertices)
+    np.testing.assert_array_equal(repaired.faces, plain.faces)
 
 
 def test_a_mesh_warning_turned_into_an_error_is_raised_every_time():

@@ -150,15 +150,20 @@ def test_open_and_misoriented_edges_are_counted_and_located():
     assert "e.g. at (" in text and "repair=True to fix the winding" in text
 
 
-def test_crossing_through_vertices_exactly_is_refused():
+def test_crossing_through_vertices_exactly_is_cut_exactly():
     # A symmetric sphere whose top is pushed straight down through its bottom: its edges pass
-    # exactly through the bottom's vertices, so no crossing is certain, yet winding numbers
-    # from -1 to 1 show that it passes through itself.
+    # exactly through the bottom's vertices, so no crossing is certain in floating point; the
+    # cut is decided in exact arithmetic.
     sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.05)
     V = np.array(sphere.vertices)
     V[V[:, 2] > 0.031, 2] -= 0.095
-    with pytest.raises(MeshError, match=r"passes through itself \(winding numbers from -1 to 1\)"):
-        Solid(V, sphere.faces, name="pushed")
+    solid, messages = solid_and_warnings(V, sphere.faces, name="pushed")
+    assert solid.volume == pytest.approx(cgal_volume(V, sphere.faces), rel=1e-12)
+    assert len(messages) == 1 and "in exact arithmetic" in messages[0]
+    assert edge_defects(solid.vertices, solid.faces).nonmanifold == 0
+    assert to_manifold(solid.vertices, solid.faces).volume() == pytest.approx(
+        solid.volume, rel=1e-12
+    )
 
 
 def test_real_objects_are_unchanged(shared_data):

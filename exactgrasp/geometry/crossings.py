@@ -4,8 +4,10 @@ Used by `exactgrasp.geometry.shells` to decide how shells relate. Triangle bound
 binned on a uniform grid of about a triangle's size; each candidate pair gets an edge-triangle
 test whose orientation signs are certified by a static error bound (Shewchuk's, see
 `exactgrasp.geometry.predicates`): a sign inside the bound is *uncertain*. Within one shell
-only certain crossings are reported, and pairs sharing an edge are skipped; between shells an
-uncertain contact is reported too.
+certain crossings are reported (and, on request, uncertain contacts, neighbours that may fold
+onto each other included); between shells an uncertain contact is reported too.
+`find_contacts` reports every pair that may meet beyond its shared corners, for the exact cut.
+The single-pair tests live in `exactgrasp.geometry.pair_tests`.
 """
 
 from __future__ import annotations
@@ -13,53 +15,15 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.compiling import inner, kernel
+from exactgrasp.geometry.pair_tests import CROSS, NO, UNSURE, meets_beyond_shared
+from exactgrasp.geometry.pair_tests import certain_sign as _sign
+from exactgrasp.geometry.pair_tests import edge_triangle as _edge_tri
+from exactgrasp.geometry.pair_tests import spread as _spread
 from exactgrasp.geometry.predicates import orient_bound, orient_det
 
-__all__ = ["CROSS", "NO", "UNSURE", "find_crossings"]
-
-#: Result codes of a pair test: certainly apart, certainly crossing, or uncertain.
-NO, CROSS, UNSURE = 0, 1, 2
+__all__ = ["CROSS", "NO", "UNSURE", "find_contacts", "find_crossings"]
 
 # -- numba kernels ----------------------------------------------------------------------------
-
-
-@inner(nogil=True, error_model="numpy")
-def _sign(det, bound):
-    if det > bound:
-        return 1
-    if det < -bound:
-        return -1
-    return 0
-
-
-@inner(nogil=True, error_model="numpy")
-def _edge_tri(X, e0, e1, a, b, c, bound):
-    """Does the closed segment from corner ``e0`` to ``e1`` meet the closed triangle of
-    corners ``a, b, c``? Corners are rows of X (6, 3): scalar loads, no array views in the
-    hot loop.
-
-    Returns ``(code, lam)``: `NO` (certainly not), `CROSS` (certainly, through the
-    triangle's interior, at ``X[e0] + lam (X[e1] - X[e0])``) or `UNSURE`.
-    """
-    px, py, pz = X[e0, 0], X[e0, 1], X[e0, 2]
-    qx, qy, qz = X[e1, 0], X[e1, 1], X[e1, 2]
-    ax, ay, az = X[a, 0], X[a, 1], X[a, 2]
-    bx, by, bz = X[b, 0], X[b, 1], X[b, 2]
-    cx, cy, cz = X[c, 0], X[c, 1], X[c, 2]
-    dp = orient_det(ax, ay, az, bx, by, bz, cx, cy, cz, px, py, pz)
-    dq = orient_det(ax, ay, az, bx, by, bz, cx, cy, cz, qx, qy, qz)
-    sp = _sign(dp, bound)
-    sq = _sign(dq, bound)
-    if sp != 0 and sp == sq:
-        return NO, 0.0
-    s1 = _sign(orient_det(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz), bound)
-    s2 = _sign(orient_det(px, py, pz, qx, qy, qz, bx, by, bz, cx, cy, cz), bound)
-    s3 = _sign(orient_det(px, py, pz, qx, qy, qz, cx, cy, cz, ax, ay, az), bound)
-    if (s1 > 0 or s2 > 0 or s3 > 0) and (s1 < 0 or s2 < 0 or s3 < 0):
-        return NO, 0.0
-    if sp == 0 or sq == 0 or s1 == 0 or s2 == 0 or s3 == 0:
-        return UNSURE, 0.0
-    return CROSS, dp / (dp - dq)
 
 
 @inner(nogil=True, error_model="numpy")
@@ -122,17 +86,6 @@ def _tri_tri(V, F, ident, t, u, skip_shared, flat_check, X, out):
 
 
 @inner(nogil=True, error_model="numpy")
-def _spread(X, ax):
-    """Extent of the six corners X (6, 3) along axis ``ax``."""
-    lo = X[0, ax]
-    hi = lo
-    for k in range(1, 6):
-        lo = min(lo, X[k, ax])
-        hi = max(hi, X[k, ax])
-    return hi - lo
-
-
-@inner(nogil=True, error_model="numpy")
 def _apart_in_projection(X):
     """Are triangles X[0:3] and X[3:6] certainly apart in their projection onto one of the
     coordinate planes? Apart there means apart in space (the projection of a common point is
@@ -189,13 +142,42 @@ def _fill_cells(i0, i1, n, offsets, keys, tris):
                     q += 1
 
 
+@inner(nogil=True, error_model="numpy")
+def _pair_code(V, F, ident, t, u, same, self_contacts, everything, X, out):
+    """The code of one candidate pair, or -1 when it is not reported (see `_pair_scan`)."""
+    shared = 0
+    for a in range(3):
+        for b in range(3):
+            if ident[F[t, a]] == ident[F[u, b]]:
+                shared += 1
+    if everything:
+        if shared == 0:
+            code = _tri_tri(V, F, ident, t, u, False, True, X, out)
+            return -1 if code == NO else code
+        return UNSURE if meets_beyond_shared(V, F, ident, t, u, X) else -1
+    if shared >= 2:
+        # Triangles on one edge meet elsewhere only where they fold onto each other.
+        if same and not self_contacts:
+            return -1
+        return UNSURE if meets_beyond_shared(V, F, ident, t, u, X) else -1
+    code = _tri_tri(V, F, ident, t, u, shared == 1 and same, same, X, out)
+    if code == NO:
+        return -1
+    if code == UNSURE and same:
+        if not self_contacts or (shared and not meets_beyond_shared(V, F, ident, t, u, X)):
+            return -1
+    return code
+
+
 @kernel(nogil=True, error_model="numpy")
-def _pair_scan(V, F, ident, shell, self_contacts, lo, hi, i0, n, keys, tris):
+def _pair_scan(V, F, ident, shell, self_contacts, everything, lo, hi, i0, n, keys, tris):
     """Test every pair of triangles sharing a grid cell, once (in the first cell they share).
 
     Returns arrays ``t, u, code, point (k, 3)`` of the pairs that matter: certain crossings
     within one shell, certain or uncertain contacts between two shells, and with
-    ``self_contacts`` uncertain contacts within one shell too.
+    ``self_contacts`` uncertain contacts within one shell too (neighbours included where
+    they may meet beyond their common corners). With ``everything``, every pair that may meet
+    anywhere but at the corners (and edge) it shares.
     """
     ts = [np.int64(0) for _ in range(0)]
     us = [np.int64(0) for _ in range(0)]
@@ -228,16 +210,9 @@ def _pair_scan(V, F, ident, shell, self_contacts, lo, hi, i0, n, keys, tris):
                 first = (max(i0[t, 0], i0[u, 0]) * n[1] + max(i0[t, 1], i0[u, 1])) * n[2]
                 if first + max(i0[t, 2], i0[u, 2]) != cell:
                     continue
-                shared = 0
-                for a in range(3):
-                    for b in range(3):
-                        if ident[F[t, a]] == ident[F[u, b]]:
-                            shared += 1
-                if shared >= 2:
-                    continue
                 same = shell[t] == shell[u]
-                code = _tri_tri(V, F, ident, t, u, shared == 1 and same, same, X, out)
-                if code == NO or (code == UNSURE and same and (shared or not self_contacts)):
+                code = _pair_code(V, F, ident, t, u, same, self_contacts, everything, X, out)
+                if code < 0:
                     continue
                 ts.append(t)
                 us.append(u)
@@ -254,43 +229,13 @@ def _pair_scan(V, F, ident, shell, self_contacts, lo, hi, i0, n, keys, tris):
     )
 
 
-def find_crossings(
-    vertices: np.ndarray,
-    faces: np.ndarray,
-    label: np.ndarray,
-    *,
-    identity: np.ndarray | None = None,
-    self_contacts: bool = False,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Pairs of triangles that cross (within a shell) or may touch (between shells).
-
-    Parameters
-    ----------
-    vertices : numpy.ndarray, shape (n, 3), float64
-    faces : numpy.ndarray, shape (m, 3), int64
-    label : numpy.ndarray, shape (m,), int64
-        Shell of every face (`split_shells`).
-    identity : numpy.ndarray, shape (n,), int64, optional
-        Vertices with equal identity are one point (copies made by
-        `exactgrasp.geometry.topology.split_nonmanifold`): triangles meeting only there share
-        a corner. Default: every vertex its own.
-    self_contacts : bool
-        Also report uncertain contacts within one shell between triangles that share no
-        corner (a surface touching itself, or crossing itself exactly through an edge or a
-        corner).
-
-    Returns
-    -------
-    t, u : numpy.ndarray, shape (k,), int64
-        Face indices of each pair found.
-    code : numpy.ndarray, shape (k,), int64
-        1: a certain crossing; 2: uncertain contact (between different shells, or within one
-        with ``self_contacts``).
-    point : numpy.ndarray, shape (k, 3), float64
-        A point of a certain crossing (NaN for uncertain contacts), in vertex units.
-    """
-    V = np.ascontiguousarray(vertices, dtype=np.float64)
-    F = np.ascontiguousarray(faces, dtype=np.int64)
+def _scan(V, F, label, ident, self_contacts: bool, everything: bool):
+    """Bin the triangles' bounding boxes on a grid and run `_pair_scan`."""
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    if len(F) == 0:
+        empty = np.empty(0, np.int64)
+        return empty, empty, empty, np.empty((0, 3))
     corners = V[F]
     lo = np.ascontiguousarray(corners.min(1))
     hi = np.ascontiguousarray(corners.max(1))
@@ -318,9 +263,72 @@ def find_crossings(
     label = np.ascontiguousarray(label, dtype=np.int64)
     ident = (
         np.arange(len(V), dtype=np.int64)
-        if identity is None
-        else np.ascontiguousarray(identity, dtype=np.int64)
+        if ident is None
+        else np.ascontiguousarray(ident, dtype=np.int64)
     )
     return _pair_scan(
-        V, F, ident, label, bool(self_contacts), lo, hi, i0, n, keys[order], tris[order]
+        V, F, ident, label, self_contacts, everything, lo, hi, i0, n, keys[order], tris[order]
     )
+
+
+def find_crossings(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    label: np.ndarray,
+    *,
+    identity: np.ndarray | None = None,
+    self_contacts: bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Pairs of triangles that cross (within a shell) or may touch (between shells).
+
+    Parameters
+    ----------
+    vertices : numpy.ndarray, shape (n, 3), float64
+    faces : numpy.ndarray, shape (m, 3), int64
+    label : numpy.ndarray, shape (m,), int64
+        Shell of every face (`split_shells`).
+    identity : numpy.ndarray, shape (n,), int64, optional
+        Vertices with equal identity are one point (copies made by
+        `exactgrasp.geometry.topology.split_nonmanifold`): triangles meeting only there share
+        a corner. Default: every vertex its own.
+    self_contacts : bool
+        Also report uncertain contacts within one shell: between triangles that share no
+        corner (a surface touching itself, or crossing itself exactly through an edge or a
+        corner), and between neighbours that may meet beyond the corners they share (a fold
+        onto itself).
+
+    Returns
+    -------
+    t, u : numpy.ndarray, shape (k,), int64
+        Face indices of each pair found.
+    code : numpy.ndarray, shape (k,), int64
+        1: a certain crossing; 2: uncertain contact (between different shells, or within one
+        with ``self_contacts``).
+    point : numpy.ndarray, shape (k, 3), float64
+        A point of a certain crossing (NaN for uncertain contacts), in vertex units.
+    """
+    return _scan(vertices, faces, label, identity, bool(self_contacts), False)
+
+
+def find_contacts(
+    vertices: np.ndarray, faces: np.ndarray, identity: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair of triangles that may meet anywhere but at the corners they share.
+
+    Parameters
+    ----------
+    vertices : numpy.ndarray, shape (n, 3), float64
+    faces : numpy.ndarray, shape (m, 3), int64
+    identity : numpy.ndarray, shape (n,), int64
+        Vertices with equal identity are one point.
+
+    Returns
+    -------
+    t, u : numpy.ndarray, shape (k,), int64
+        Face indices of each pair: the pairs the exact cut
+        (`exactgrasp.geometry.exact_cut`) must decide. Pairs left out certainly meet at most
+        at their shared corners and along their shared edge.
+    """
+    label = np.zeros(len(faces), np.int64)
+    t, u, _, _ = _scan(vertices, faces, label, identity, True, True)
+    return t, u

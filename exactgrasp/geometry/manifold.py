@@ -29,6 +29,10 @@ __all__ = [
 
 MeshArrays = tuple[np.ndarray, np.ndarray]
 
+# How closely manifold3d's volume of a solid must match the divergence volume of its arrays:
+# its own simplification moves them by about its tolerance, 1e-12 of the coordinates.
+_VOLUME_AGREEMENT = 1e-8
+
 REPAIR_HINT = (
     "manifold3d needs a closed, consistently oriented surface; load the mesh with ",
     Fix("repair", True),
@@ -103,34 +107,31 @@ def to_manifold(
         )
     if solid.volume() <= 0:
         raise MeshError(f"{name} has non-positive volume (faces inward?); ", *fix_parts)
-    _check_import(solid, V, F, name)
+    _check_volume_kept(solid, V, np.asarray(F, dtype=np.int64), name)
     return solid
 
 
-#: How far manifold3d's volume of an imported mesh may lie from the volume its faces enclose
-#: (relative): far above the rounding of either sum, far below any face it could drop.
-IMPORT_RTOL = 1e-9
-
-
-def _check_import(solid: manifold3d.Manifold, V: np.ndarray, F: np.ndarray, name: str) -> None:
-    """Refuse a mesh whose manifold3d import encloses another volume than its faces do.
-
-    manifold3d simplifies what it imports, and on some meshes (a surface folding back on
-    itself in a zero-thickness fin, as its own union of shells touching along a face can
-    leave) it collapses a vertex that is not flat and changes the solid without a word."""
-    P = V - V.mean(axis=0)
+def _check_volume_kept(solid: manifold3d.Manifold, V: np.ndarray, F: np.ndarray, name: str):
+    """Refuse a mesh whose volume manifold3d does not keep: it simplifies features thinner
+    than its tolerance (about 1e-12 of the largest coordinate), and slivers that thin (left
+    where faces built to lie in one plane were rotated in floating point) can make that
+    simplification drop part of the solid."""
+    P = V - V.mean(0)
     a, b, c = P[F[:, 0]], P[F[:, 1]], P[F[:, 2]]
-    enclosed = float(np.einsum("ij,ij->", a, np.cross(b, c))) / 6.0
-    if abs(solid.volume() - enclosed) <= IMPORT_RTOL * abs(enclosed):
+    cross = np.cross(b - a, c - a)
+    volume = float(np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0)
+    if abs(solid.volume() - volume) <= _VOLUME_AGREEMENT * abs(volume):
         return
-    kept = {tuple(x) for x in np.asarray(solid.to_mesh64().vert_properties)[:, :3]}
-    lost = [x for x in V if tuple(x) not in kept]
-    where = format_point(lost[0]) if lost else "?"
+    edges = np.linalg.norm(P[F[:, [1, 2, 0]]] - P[F], axis=2).max(1)
+    height = np.linalg.norm(cross, axis=1) / np.maximum(edges, 1e-300)
+    thinnest = int(np.argmin(height))
     raise MeshError(
-        f"{name}: manifold3d reads its {len(F)} faces as enclosing {solid.volume():.9g} "
-        f"where they enclose {enclosed:.9g} (it collapsed the surface near {where}, which "
-        "folds back on itself there), so no boolean of it would be exact; move the part "
-        "that folds back by a small amount, or merge the mesh's parts in a modeller."
+        f"{name}: manifold3d reads a volume of {solid.volume():.9g} where the surface "
+        f"bounds {volume:.9g}: its simplification (tolerance {solid.get_tolerance():.2g}) "
+        f"drops slivers as thin as {height[thinnest]:.2g} (e.g. near "
+        f"{format_point(V[F[thinnest]].mean(0))}), left where faces built to lie in one plane "
+        "were rotated or moved in floating point; load the mesh in the frame where those "
+        "faces are exact (before rotating it), or merge its overlapping parts in a modeller."
     )
 
 

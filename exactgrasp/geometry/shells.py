@@ -8,20 +8,22 @@ at least 1.
 
 * Disjoint shells, and cavities (a reversed shell inside an outward one, possibly holding
   islands) are boundaries of that set: the mesh is returned unchanged.
-* Shells whose surfaces cross or may touch, and same-orientation shells nested in each other
-  (a region of winding number 2), are replaced by the solid they bound, computed with
-  manifold3d booleans, with a warning.
+* Shells whose surfaces cross, and same-orientation shells nested in each other (a region of
+  winding number 2), are replaced by the solid they bound, with a warning: outward shells
+  whose crossings are all certain are merged with manifold3d booleans; shells that touch or
+  overlap where floating-point signs cannot decide (faces in one plane, an edge through an
+  edge or a corner, a corner on a face), and mixes a union cannot express, are cut along
+  their contacts (`exactgrasp.geometry.untangle.cut_cluster`, in exact arithmetic where
+  needed) and the patches between winding numbers 1 and 0 kept.
 * A reversed shell inside no other shell is an inside-out body: flipped with a warning or
   refused (``orientation``).
-* A shell whose surface crosses itself has no well-defined inside and is refused.
+* A shell that crosses or touches itself has been cut already
+  (`exactgrasp.geometry.untangle`).
 
 Crossings are found with a uniform grid of triangle bounding boxes and an edge-triangle test
 whose orientation signs are certified by a static error bound (Shewchuk's, as in the exact
 backend's kernels): a sign inside the bound is *uncertain*. Between two shells an uncertain
-sign (touching, coplanar contact) counts as "may touch" and the shells are merged, which is
-safe. Within one shell only certain crossings count; pairs of triangles sharing an edge are
-skipped (two non-coplanar triangles sharing an edge meet only on it), pairs sharing a vertex
-are tested (their shared corner gives uncertain signs, never a certain crossing).
+sign (touching, coplanar contact) counts as "may touch": the shells are related as one group.
 """
 
 from __future__ import annotations
@@ -276,7 +278,8 @@ def _lone_shell(shells: _Shells, i: int, w: int, held: list[int]):
 def _resolve_cluster(shells: _Shells, idx: np.ndarray, w: int, pair_labels, crossing: int):
     """The boundary of the solid that the crossing or touching shells ``idx`` bound inside
     winding number ``w`` (their mesh, or None when they bound none of it): dropped, cut
-    along their crossings, or merged with manifold3d.
+    along their contacts (in exact arithmetic where floating-point signs cannot decide
+    them), or merged with manifold3d.
 
     ``pair_labels`` holds the shells of each of the cluster's triangle pairs, ``crossing``
     how many of them cross for certain."""
@@ -291,11 +294,20 @@ def _resolve_cluster(shells: _Shells, idx: np.ndarray, w: int, pair_labels, cros
         )
         return None
     why = _cut_reason(shells, pos, neg, w, pair_labels)
-    if why:
-        refusal = _unresolved(shells, idx, why)
-        merged_v, merged_f = cut_cluster([shells.parts[int(i)] for i in idx], w, refusal)
-        done = f"cut shells {shells.named(idx)} ({how}, {why}) along their crossings into the"
-        done += " boundary of the solid"
+    if why or crossing < len(pair_labels):
+        # Contacts that floating-point signs cannot decide are cut exactly, as is what a
+        # union less a union cannot express.
+        parts = [shells.parts[int(i)] for i in idx]
+        merged_v, merged_f, exactly = cut_cluster(
+            parts, w, crossing < len(pair_labels), shells.name
+        )
+        along = " in exact arithmetic" if exactly else ""
+        if why:
+            done = f"cut shells {shells.named(idx)} ({how}, {why}) along their crossings"
+            done += f"{along} into the boundary of the solid"
+        else:
+            done = f"merged shells {shells.named(idx)} ({how}) into the solid they bound, "
+            done += f"cut along their contacts{along}"
     else:
         merged_v, merged_f = _merge(shells.parts, pos, neg, shells.name)
         done = f"merged shells {shells.named(idx)} ({how}) into the solid they bound"
@@ -323,16 +335,6 @@ def _cut_reason(shells: _Shells, pos: list[int], neg: list[int], w: int, pair_la
     if (pos and w < 0) or (neg and w >= 2):
         return f"cross each other where the winding number around them is {w}"
     return ""
-
-
-def _unresolved(shells: _Shells, idx, why: str) -> MeshError:
-    """The error of shells ``idx`` whose solid is not resolved here, for ``why``."""
-    return MeshError(
-        f"{shells.name}: shells {shells.named(idx)} {why}; the solid they bound is "
-        "not resolved here. Make every body one outward closed shell (cavities as reversed "
-        "shells strictly inside it), e.g. with boolean unions and differences in a modeller "
-        "(Blender's Boolean modifier, MeshLab's 'Mesh Boolean')."
-    )
 
 
 def _holders(shells: _Shells, cluster: np.ndarray, members) -> list[list[int]]:

@@ -27,7 +27,7 @@ from exactgrasp.geometry.intake import (
     unit_scale,
 )
 from exactgrasp.geometry.shells import resolve_shells
-from exactgrasp.geometry.topology import EdgeDefects, drop_repeated_faces, edge_defects
+from exactgrasp.geometry.topology import EdgeDefects, bounding_faces
 
 __all__ = ["MAX_PLAUSIBLE_SIZE_M", "ORIENTATIONS", "UNITS", "Solid", "load_points", "unit_scale"]
 
@@ -107,12 +107,12 @@ class Solid:
         # Exact duplicates only: STL stores every triangle's corners separately.
         mesh.merge_vertices(merge_tex=True, merge_norm=True, digits_vertex=None)
         self.repair_report: dict[str, Any] | None = None
-        defects = edge_defects(mesh.vertices, drop_repeated_faces(mesh.faces)[0])
+        defects = bounding_faces(mesh.vertices, mesh.faces)[3]
         # A closed surface bounds a solid as it is, however messy: repair is for open or
         # inconsistently oriented surfaces only.
         if repair and not defects.is_cycle:
             mesh = self._repair(mesh)
-            defects = edge_defects(mesh.vertices, drop_repeated_faces(mesh.faces)[0])
+            defects = bounding_faces(mesh.vertices, mesh.faces)[3]
         self._check_closed(defects)
         # Before the orientation check: one inside-out shell among several is not an
         # inside-out mesh, and overlapping shells make the signed volume meaningless.

@@ -17,7 +17,7 @@ from exactgrasp.errors import Fix, MeshError, ModelError, recording_warnings, wa
 from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
 from exactgrasp.geometry.solid import Solid
-from exactgrasp.geometry.topology import drop_repeated_faces, edge_defects
+from exactgrasp.geometry.topology import bounding_faces
 from exactgrasp.version import __version__
 
 __all__ = [
@@ -149,8 +149,7 @@ def _weld(V, F, what, repairs, resolved):
     F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])]
     if len(F) == 0:
         raise ModelError(f"{what} has no faces")
-    F, _, _ = drop_repeated_faces(F)
-    defects = edge_defects(V, F)
+    F, _, _, defects = bounding_faces(V, F)
     if not defects.is_cycle:
         if repairs is not None:
             return repair_mesh(V, F, what, repairs, resolved)

@@ -141,8 +141,9 @@ class Hand:
     ) -> Hand:
         """A rigid hand from one mesh file: one link, the solid its closed shells bound.
 
-        Overlapping shells are merged into one solid with a warning and a shell crossing
-        itself is refused (see `exactgrasp.geometry.shells.resolve_shells`).
+        Overlapping shells are merged into one solid with a warning, and a shell crossing or
+        touching itself is cut into the solid it bounds (see
+        `exactgrasp.geometry.shells.resolve_shells`).
 
         Parameters
         ----------
