@@ -32,7 +32,7 @@ from tests.degenerate_palms import (
     reversed_mesh,
     union_of_boxes,
 )
-from tests.exact_reference import cgal_volume, rational_volume
+from tests.exact_reference import cgal_volume, mesh_volume, rational_volume
 from tests.messy_meshes import DENTED_VOLUME, dented_box, joined
 
 igl = pytest.importorskip("igl", reason="libigl (the dev extra) not installed")
@@ -283,3 +283,25 @@ def test_fuzzed_box_palms_match_cgal(case):
         assert rational_volume(solid.vertices, solid.faces) == union_of_boxes(spans)
     assert_same_solid(V, F, solid, np.random.default_rng(3), n=300)
     assert_clean(solid, "fuzzed palm", frame[4])
+
+
+def test_a_hand_whose_palm_crosses_itself_along_coplanar_patches_loads_with_repair(tmp_path):
+    # Two shells crossing along coplanar patches, one folded through itself, as a hand's palm
+    # geom with repair=True (a closed surface is never repaired: it is resolved). MuJoCo keeps
+    # the vertices in float32 about the mesh's centre, so the volume is the exact solid's to
+    # that rounding; the same solid against CGAL to 1e-12 is the test above.
+    pytest.importorskip("mujoco")
+    V, F = PALMS["folded and plate"]()
+    trimesh.Trimesh(V * 0.08, F, process=False).export(tmp_path / "palm.stl")
+    (tmp_path / "hand.xml").write_text(
+        '<mujoco><asset><mesh name="palm" file="palm.stl"/></asset><worldbody>'
+        '<body name="palm"><geom type="mesh" mesh="palm"/></body></worldbody></mujoco>'
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hand = eg.Hand.from_mjcf(tmp_path / "hand.xml", frame=eg.HandFrame.identity(), repair=True)
+    assert any("in exact arithmetic" in str(w.message) for w in caught)
+    (link,) = hand.link_arrays()
+    assert edge_defects(*link).nonmanifold == 0
+    assert mesh_volume(*link) == pytest.approx(0.08**3, rel=1e-6)  # the solid: 1.0 unscaled
+    assert hand.volume == pytest.approx(mesh_volume(*link), rel=1e-9)
