@@ -1,5 +1,5 @@
 """Winding numbers: of one point (`winding_number`) and of every node of a lattice
-(`winding_inside_lattice`, `winding_range_columns`).
+(`winding_inside_lattice`).
 
 The point routine sums the solid angles of the triangles (van Oosterom and Strackee), O(faces)
 per point; the lattice routine sweeps columns of nodes and gives exact integer winding numbers
@@ -12,10 +12,6 @@ compiles at a first call, and they run without the GIL.
 
 from __future__ import annotations
 
-from exactgrasp.geometry._winding import (
-    winding_inside_lattice,
-    winding_number,
-    winding_range_columns,
-)
+from exactgrasp.geometry._winding import winding_inside_lattice, winding_number
 
-__all__ = ["winding_inside_lattice", "winding_number", "winding_range_columns"]
+__all__ = ["winding_inside_lattice", "winding_number"]

@@ -191,7 +191,6 @@ def record(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     from exactgrasp.geometry.winding import (
         winding_inside_lattice,
         winding_number,
-        winding_range_columns,
     )
 
     out = {}
@@ -203,7 +202,6 @@ def record(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         case = key.rsplit("/", 1)[0]
         nx, ny, nz = (int(v) for v in arrays[f"{case}/shape"])
         out[f"{case}/result"] = winding_inside_lattice(arrays[key], nx, ny, nz)
-        out[f"{case}/range"] = np.array(winding_range_columns(arrays[key], nx, ny), np.int64)
     for key in [k for k in arrays if k.startswith("dart/") and k.endswith("/points")]:
         case = key.rsplit("/", 1)[0]
         out[f"{case}/result"] = dart_throw(arrays[key], float(arrays[f"{case}/spacing"]))
