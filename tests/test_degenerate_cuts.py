@@ -136,17 +136,23 @@ def test_what_the_floating_point_cut_cannot_decide_is_cut_exactly(monkeypatch):
     assert_clean(solid, "dented", 1e-12)
 
 
-def test_a_hand_with_a_degenerate_palm_loads(tmp_path):
-    pytest.importorskip("mujoco")
-    V, F = PALMS["coplanar plates"]()
-    trimesh.Trimesh(V * 0.08, F, process=False).export(tmp_path / "palm.stl")
-    (tmp_path / "hand.xml").write_text(
+def palm_hand(folder, V, F, **options) -> eg.Hand:
+    """A hand of one body whose mesh geom is (V, F) in metres, written as STL and MJCF in
+    ``folder`` and loaded as a model is."""
+    trimesh.Trimesh(V, F, process=False).export(folder / "palm.stl")
+    (folder / "hand.xml").write_text(
         '<mujoco><asset><mesh name="palm" file="palm.stl"/></asset><worldbody>'
         '<body name="palm"><geom type="mesh" mesh="palm"/></body></worldbody></mujoco>'
     )
+    return eg.Hand.from_mjcf(folder / "hand.xml", frame=eg.HandFrame.identity(), **options)
+
+
+def test_a_hand_with_a_degenerate_palm_loads(tmp_path):
+    pytest.importorskip("mujoco")
+    V, F = PALMS["coplanar plates"]()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        hand = eg.Hand.from_mjcf(tmp_path / "hand.xml", frame=eg.HandFrame.identity())
+        hand = palm_hand(tmp_path, V * 0.08, F)
     assert any("in exact arithmetic" in str(w.message) for w in caught)
     (link,) = hand.link_arrays()
     assert edge_defects(*link).nonmanifold == 0
@@ -292,14 +298,9 @@ def test_a_hand_whose_palm_crosses_itself_along_coplanar_patches_loads_with_repa
     # that rounding; the same solid against CGAL to 1e-12 is the test above.
     pytest.importorskip("mujoco")
     V, F = PALMS["folded and plate"]()
-    trimesh.Trimesh(V * 0.08, F, process=False).export(tmp_path / "palm.stl")
-    (tmp_path / "hand.xml").write_text(
-        '<mujoco><asset><mesh name="palm" file="palm.stl"/></asset><worldbody>'
-        '<body name="palm"><geom type="mesh" mesh="palm"/></body></worldbody></mujoco>'
-    )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        hand = eg.Hand.from_mjcf(tmp_path / "hand.xml", frame=eg.HandFrame.identity(), repair=True)
+        hand = palm_hand(tmp_path, V * 0.08, F, repair=True)
     assert any("in exact arithmetic" in str(w.message) for w in caught)
     (link,) = hand.link_arrays()
     assert edge_defects(*link).nonmanifold == 0
