@@ -37,18 +37,21 @@ def _unit(N, s):
 
 
 @inner(nogil=True, error_model="numpy")
-def _piece(G, r, nx, ny, nz, px, py, pz, qx, qy, qz):
-    """Add the piece ``p → q`` of a face with unit normal ``n`` to row ``r`` of ``G``."""
-    c = nx * (py * qz - pz * qy) + ny * (pz * qx - px * qz) + nz * (px * qy - py * qx)
-    sx, sy, sz = px + qx, py + qy, pz + qz
-    a = c / 2.0
-    b = c / 6.0
+def _add(G, r, nx, ny, nz, sx, sy, sz, a, b):
+    """Add ``n a`` to ``∫ n dA`` and ``(s × n) b`` to ``∫ x × n dA`` in row ``r`` of ``G``."""
     G[r, 0] += nx * a
     G[r, 1] += ny * a
     G[r, 2] += nz * a
     G[r, 3] += (sy * nz - sz * ny) * b
     G[r, 4] += (sz * nx - sx * nz) * b
     G[r, 5] += (sx * ny - sy * nx) * b
+
+
+@inner(nogil=True, error_model="numpy")
+def _piece(G, r, nx, ny, nz, px, py, pz, qx, qy, qz):
+    """Add the piece ``p → q`` of a face with unit normal ``n`` to row ``r`` of ``G``."""
+    c = nx * (py * qz - pz * qy) + ny * (pz * qx - px * qz) + nz * (px * qy - py * qx)
+    _add(G, r, nx, ny, nz, px + qx, py + qy, pz + qz, c / 2.0, c / 6.0)
 
 
 @inner(nogil=True, error_model="numpy")
@@ -68,15 +71,7 @@ def _edge_share(V, N, E, ET, e, f, h, G, row0):
         c = nx * wx + ny * wy + nz * wz
         if side == 1:
             c = -c
-        a = c * f / 2.0
-        b = c / 6.0
-        r = row0 + t
-        G[r, 0] += nx * a
-        G[r, 1] += ny * a
-        G[r, 2] += nz * a
-        G[r, 3] += (sy * nz - sz * ny) * b
-        G[r, 4] += (sz * nx - sx * nz) * b
-        G[r, 5] += (sx * ny - sy * nx) * b
+        _add(G, row0 + t, nx, ny, nz, sx, sy, sz, c * f / 2.0, c / 6.0)
 
 
 @inner(nogil=True, error_model="numpy")
