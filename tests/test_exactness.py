@@ -180,6 +180,10 @@ def test_an_uncertain_pose_takes_the_limit_and_matches_the_rational_volume():
     assert result.pose_sources.tolist() == ["limit"]
     assert result.volumes[0] == pytest.approx(0.125, rel=1e-12)
     assert abs(result.volumes[0] - 0.125) <= result.volume_bounds[0]
+    # Fixed directions and steps: another intersector, with threads, gives the same bits.
+    again = ExactIntersector([hand], [obj], broadphase="coal", n_jobs=2).intersect(np.eye(4)[None])
+    assert again.volumes.tobytes() == result.volumes.tobytes()
+    assert again.volume_bounds.tobytes() == result.volume_bounds.tobytes()
 
 
 def test_a_full_crossing_buffer_is_run_again_with_a_larger_one():
