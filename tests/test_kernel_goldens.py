@@ -1,11 +1,16 @@
-"""The winding-number and voxel kernels give, to the bit, the results the numba kernels gave.
+"""The compiled kernels give, to the bit, the results the numba kernels gave.
 
 ``tests/kernel_goldens/numba_kernels.npz`` holds fuzzed inputs (closed, self-crossing and open
 meshes; lattices whose rays pass exactly through vertices, edges and faces; dart-throwing
 candidates; a hand grid, an object's points and 400 poses, some across the grid's border and
-some far) and the results of the numba kernels of commit 98cb945 on them, recorded by
-``tests/kernel_goldens/record.py``. Floats are compared by their bytes: a sign of zero or the
-last bit of a winding number differing fails.
+some far) and the results of the numba winding-number and voxel kernels of commit 98cb945 on
+them, recorded by ``tests/kernel_goldens/record.py``. ``numba_crossings.npz`` holds meshes
+(the tests' solids that touch or cross themselves, as built and moved; triangle soups; the
+meshes the intake scans while it resolves them) and what the numba `find_crossings` and
+`find_contacts` of commit 473962b returned on them, with the results on the messy-hand
+benchmark's palm and the shared data's LEAP Hand link, recorded by
+``tests/kernel_goldens/record_crossings.py``. Floats are compared by their bytes: a sign of
+zero or the last bit of a winding number or a crossing point differing fails.
 """
 
 from __future__ import annotations
@@ -26,6 +31,15 @@ from exactgrasp.geometry.winding import (
 
 HERE = Path(__file__).resolve().parent / "kernel_goldens"
 GOLDEN = dict(np.load(HERE / "numba_kernels.npz"))
+CROSSINGS = dict(np.load(HERE / "numba_crossings.npz"))
+
+
+def script(name: str):
+    """A recording script of ``tests/kernel_goldens`` as a module."""
+    spec = importlib.util.spec_from_file_location(f"kernel_{name}", HERE / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def cases(kind: str) -> list[str]:
@@ -138,11 +152,96 @@ def test_counts(variant, tiles, pieces):
 
 def test_the_recording_script_makes_the_stored_inputs():
     """The inputs are the script's, so a case can be added to it and recorded again."""
-    spec = importlib.util.spec_from_file_location("kernel_record", HERE / "record.py")
-    record = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(record)
-    made = record.inputs()
+    made = script("record").inputs()
     stored = {k for k in GOLDEN if not k.endswith(("/result", "/range"))}
     assert set(made) == stored
     for key in ("winding/open/points", "dart/long/points", "count/linear", "count/tiles"):
         assert_same_bits(made[key], GOLDEN[key])
+
+
+# -- crossings ---------------------------------------------------------------------------------
+
+RECORD_CROSSINGS = script("record_crossings")
+
+
+def meshes(group: str) -> list[str]:
+    """The stored meshes of one group (``built``, ``fuzz``, ``intake``)."""
+    return sorted(k[:-2] for k in CROSSINGS if k.startswith(group + "/") and k.endswith("/V"))
+
+
+def assert_same_scans(case: str, V, F, label, ident) -> None:
+    got = RECORD_CROSSINGS.scan(V, F, label, ident)
+    assert {f"{case}/{k}" for k in got} == {k for k in CROSSINGS if k.startswith(case + "/")} - {
+        f"{case}/{k}" for k in ("V", "F", "label", "ident", "sha256")
+    }
+    for key, value in got.items():
+        try:
+            assert_same_bits(value, CROSSINGS[f"{case}/{key}"])
+        except AssertionError as exc:
+            raise AssertionError(f"{case}/{key}: {exc}") from None
+
+
+def test_the_recorded_crossings_are_not_trivial():
+    assert len(meshes("built")) == 41 and len(meshes("fuzz")) == 10
+    assert len(meshes("intake")) > 100
+    # (pairs apart, certain crossings, uncertain contacts): the soup on a grid has both; turned,
+    # fewer of its contacts are seen at all; with its bound overflowing, every sign uncertain.
+    codes = {
+        f"{case}/{mode}": np.bincount(CROSSINGS[f"{case}/{mode}/code"], minlength=3).tolist()
+        for case in ("fuzz/grid", "fuzz/grid_rotated", "fuzz/overflowing_bound", "large/palm")
+        for mode in ("crossings", "self")
+    }
+    assert codes == {
+        "fuzz/grid/crossings": [0, 71, 583],
+        "fuzz/grid/self": [0, 71, 706],
+        "fuzz/grid_rotated/crossings": [0, 71, 507],
+        "fuzz/grid_rotated/self": [0, 71, 610],
+        "fuzz/overflowing_bound/crossings": [0, 0, 1046],
+        "fuzz/overflowing_bound/self": [0, 0, 1180],
+        "large/palm/crossings": [0, 1704, 0],
+        "large/palm/self": [0, 1704, 0],
+    }
+    # The palm's 1,704 certain crossings, each with a point; the link's four-face edges.
+    palm = CROSSINGS["large/palm/self/point"]
+    assert palm.shape == (1704, 3) and np.isfinite(palm).all()
+    assert len(CROSSINGS["large/dip_link/self/t"]) == 190
+
+
+@pytest.mark.parametrize("group", ["built", "fuzz", "intake"])
+def test_crossings_and_contacts(group):
+    for case in meshes(group):
+        arrays = [CROSSINGS[f"{case}/{k}"] for k in ("V", "F", "label", "ident")]
+        assert_same_scans(case, *arrays)
+
+
+@pytest.mark.parametrize("name", ["palm", "dip_link"])
+def test_crossings_of_large_meshes(name):
+    from tests.conftest import SHARED_DATA
+
+    mesh = (
+        RECORD_CROSSINGS.messy_palm() if name == "palm" else RECORD_CROSSINGS.dip_link(SHARED_DATA)
+    )
+    if mesh is None:
+        pytest.skip(f"shared data not found at {SHARED_DATA} (set EXACTGRASP_DATA)")
+    arrays = RECORD_CROSSINGS.with_shells(*mesh)
+    assert_same_bits(RECORD_CROSSINGS.digest(*arrays.values()), CROSSINGS[f"large/{name}/sha256"])
+    assert_same_scans(f"large/{name}", *arrays.values())
+
+
+def test_crossings_on_threads_at_once():
+    """The kernels hold no state between calls: scans on three threads at once agree."""
+    cases = meshes("fuzz") + meshes("built")
+
+    def run(case: str) -> None:
+        assert_same_scans(case, *(CROSSINGS[f"{case}/{k}"] for k in ("V", "F", "label", "ident")))
+
+    with ThreadPoolExecutor(3) as pool:
+        list(pool.map(run, cases * 2))
+
+
+def test_the_crossing_script_makes_the_stored_meshes():
+    made = RECORD_CROSSINGS.inputs()
+    stored = {k for k in CROSSINGS if k.startswith(("built/", "fuzz/")) and k.count("/") == 2}
+    assert set(made) == stored
+    for key in made:
+        assert_same_bits(made[key], CROSSINGS[key])
