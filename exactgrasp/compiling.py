@@ -1,6 +1,7 @@
 """How the package's numba kernels are compiled: `kernel` for those Python calls, `inner` for
-those only other kernels call. (The winding-number and voxel kernels are compiled ahead of time
-with Cython when the package is built, and their ``.pyx`` sources join the cache key below.)
+those only other kernels call. (The winding-number, crossing and voxel kernels are compiled
+ahead of time with Cython when the package is built, and their ``.pyx`` and ``.pxd`` sources
+join the cache key below.)
 
 Both are ``numba.njit`` with ``cache=True`` (compiled once per machine, then loaded from
 numba's on-disk cache) plus two rules that cut compile time without changing a result:
@@ -70,9 +71,9 @@ _NO_WRAPPERS = ("no_cpython_wrapper", "no_cfunc_wrapper")
 #: the constants compiled into them; with this module, their sources key the on-disk cache.
 KERNEL_PACKAGES = ("geometry", "backends/exact", "backends/voxel")
 
-#: The sources digested: Python modules, and the Cython kernels (installed beside their
-#: compiled extensions).
-KERNEL_SOURCES = ("*.py", "*.pyx")
+#: The sources digested: Python modules, and the Cython kernels and their inline parts
+#: (installed beside their compiled extensions).
+KERNEL_SOURCES = ("*.py", "*.pyx", "*.pxd")
 
 
 @cache

@@ -23,6 +23,8 @@ PACKAGE = ROOT / "exactgrasp"
 #: What a folder of the package may hold that is not installed from it.
 NOT_INSTALLED = {"meson.build"}
 PYX = sorted(PACKAGE.rglob("*.pyx"))
+#: Inline functions the kernels cimport (declarations and bodies, no extension of their own).
+PXD = sorted(PACKAGE.rglob("*.pxd"))
 MAX_LINES, MAX_FUNCTION_LINES = 400, 80
 
 
@@ -81,17 +83,18 @@ def test_versions_and_build_backend_agree():
 def test_the_kernels_are_compiled_extensions_and_need_no_numba():
     code = (
         "import sys\n"
-        "from exactgrasp.geometry import winding\n"
+        "from exactgrasp.geometry import crossings, winding\n"
         "from exactgrasp.backends.voxel import kernel, points, grids\n"
         "import exactgrasp.geometry._winding as w, exactgrasp.backends.voxel._kernel as k\n"
-        "print(w.__file__, k.__file__, type(winding.winding_number).__name__)\n"
-        "print('numba' in sys.modules)\n"
+        "import exactgrasp.geometry._crossings as c\n"
+        "print(w.__file__, k.__file__, c.__file__, type(winding.winding_number).__name__)\n"
+        "print(type(crossings.pair_scan).__name__, 'numba' in sys.modules)\n"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT
     ).stdout.split()
-    assert all(path.endswith((".so", ".pyd")) for path in out[:2]), out
-    assert out[2] == "cython_function_or_method" and out[3] == "False"
+    assert all(path.endswith((".so", ".pyd")) for path in out[:3]), out
+    assert out[3] == out[4] == "cython_function_or_method" and out[5] == "False"
 
 
 def functions(text: str) -> list[tuple[str, int]]:
@@ -140,6 +143,22 @@ def test_cython_kernels_follow_the_house_rules(pyx):
             assert any(h in doc for h in sections), f"{pyx.name}: {public} (numpydoc)"
     # The GIL is released where the kernels loop.
     assert "with nogil:" in text and "noexcept nogil" in text
+
+
+@pytest.mark.parametrize("pxd", PXD, ids=lambda p: str(p.relative_to(ROOT)))
+def test_inline_kernel_parts_follow_the_house_rules(pxd):
+    text = pxd.read_text()
+    assert len(text.splitlines()) <= MAX_LINES, f"{pxd.name}: more than {MAX_LINES} lines"
+    assert re.match(r"(# cython: .*\n)+\"\"\"\S", text), f"{pxd.name}: no module docstring"
+    found = functions(text)
+    assert found, pxd.name
+    long = [(name, n) for name, n in found if n > MAX_FUNCTION_LINES]
+    assert not long, f"{pxd.name}: functions over {MAX_FUNCTION_LINES} lines: {long}"
+    for name, _ in found:
+        head, body = text.split(f"{name}(", 1)
+        assert head.rsplit("\n", 1)[-1].startswith("cdef inline "), f"{pxd.name}: {name}"
+        assert "noexcept nogil:" in body.split('"""', 1)[0], f"{pxd.name}: {name} holds the GIL"
+        assert '"""' in body.split("\n\n\n", 1)[0], f"{pxd.name}: {name} has no docstring"
 
 
 def test_the_function_rule_measures_functions():

@@ -1,7 +1,9 @@
-"""Filtered orientation predicates (numba), shared by `geometry.shells` and the exact backend.
+"""Filtered orientation predicates (numba), for the exact backend's kernels.
 
 `orient` is the determinant of Shewchuk's orientation test evaluated in one fixed order, with
 the static error bound `orient_bound`: a sign whose magnitude exceeds the bound is certain.
+The compiled (Cython) kernels have their own inline twin with the same arithmetic,
+``_predicates.pxd``; this module goes when the exact backend's kernels are compiled too.
 """
 
 from __future__ import annotations
