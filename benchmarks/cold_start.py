@@ -1,10 +1,10 @@
 """Cold start: one voxel and one exact descriptor in a fresh process, empty numba cache or full.
 
-The winding-number and voxel kernels are compiled when the package is built (Cython): a cold
-run compiles only the numba kernels that remain (the geometry's predicates and crossings, the
-exact backend's). ``--again`` also computes each descriptor a second time in the same process
-(phase ``<backend> again``: every kernel, grid and cache warm) and prints the first descriptor's
-time over that warm one's.
+The winding-number, crossing and voxel kernels are compiled when the package is built
+(Cython): a cold run compiles only the numba kernels that remain (the exact backend's, with the
+orientation predicates they call). ``--again`` also computes each descriptor a second time in
+the same process (phase ``<backend> again``: every kernel, grid and cache warm) and prints the
+first descriptor's time over that warm one's.
 
 Each run is a new Python process with ``NUMBA_CACHE_DIR`` pointing at a folder of its own, so
 the package's own ``__pycache__`` is never read or written. A cold run starts from an empty
@@ -28,7 +28,8 @@ numba's ``numba:compile`` event, which fires on a cache miss only: a warm run re
 
 ``--builtin`` uses the README's first grasp instead: the built-in Barrett hand, fingers half
 closed, on the built-in 6 x 10 x 10 cm box (no data folder needed; building the hand from its
-model runs the geometry's shell check, whose numba kernels then compile in a cold run).
+model runs the geometry's shell check, whose crossing kernels are compiled Cython: with the
+voxel backend alone, a cold run compiles nothing).
 
 Without ``--builtin``, needs the shared data folder (``$EXACTGRASP_DATA``, else
 ``../shared/data`` beside the repository; ``--data`` elsewhere); skips with a message when it
