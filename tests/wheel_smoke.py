@@ -26,9 +26,9 @@ def main() -> int:
     start = time.perf_counter()
     import exactgrasp as eg
     from exactgrasp.backends.voxel import _kernel, _points, kernel
-    from exactgrasp.geometry import _winding
+    from exactgrasp.geometry import _crossings, _winding
 
-    for module in (_kernel, _points, _winding):
+    for module in (_kernel, _points, _winding, _crossings):
         path = Path(module.__file__)
         assert path.suffix in (".so", ".pyd"), path
         assert "site-packages" in path.parts, f"{path}: not the installed package"
