@@ -43,15 +43,52 @@ def cgal_volume(V, F) -> float:
     return mesh_volume(*cgal_solid(V, F))
 
 
-def cgal_intersection_volume(a, b) -> float:
-    """Volume of solid(a) ∩ solid(b) for two (vertices, faces) pairs, by CGAL's exact
-    arrangement: the cells of winding number >= 1 with respect to both."""
+def _cgal_intersection_mesh(a, b) -> tuple[np.ndarray, np.ndarray]:
     VA, FA = (np.ascontiguousarray(x) for x in (np.asarray(a[0], float), np.asarray(a[1])))
     VB, FB = (np.ascontiguousarray(x) for x in (np.asarray(b[0], float), np.asarray(b[1])))
     VC, FC, _ = _cgal().mesh_boolean(
         VA, FA.astype(np.int64), VB, FB.astype(np.int64), "intersection"
     )
+    return VC, FC
+
+
+def exact_shift(*vertex_arrays) -> np.ndarray:
+    """(3,): a translation, integers near the meshes' common centre, by which every coordinate
+    moves without rounding (checked in exact arithmetic); 0 on an axis where none does."""
+    V = np.concatenate([np.asarray(v, float) for v in vertex_arrays])
+    shift = np.zeros(3)
+    for k in range(3):
+        s = float(np.round((V[:, k].min() + V[:, k].max()) / 2))
+        x = np.unique(V[:, k])
+        if all(Fraction(c) - Fraction(s) == Fraction(c - s) for c in x.tolist()):
+            shift[k] = s
+    return shift
+
+
+def cgal_intersection_volume(a, b) -> float:
+    """Volume of solid(a) ∩ solid(b) for two (vertices, faces) pairs, by CGAL's exact
+    arrangement: the cells of winding number >= 1 with respect to both."""
+    VC, FC = _cgal_intersection_mesh(a, b)
     return mesh_volume(VC, FC) if len(FC) else 0.0
+
+
+def cgal_intersection(a, b) -> tuple[float, float]:
+    """`cgal_intersection_volume` with what libigl's rounding leaves uncertain: (volume,
+    bound). CGAL computes the intersection exactly, but libigl returns its vertices rounded
+    to float64 (each coordinate by at most half a unit in its last place, ``δ``), which moves
+    each face by at most ``√3 δ`` and the volume by at most ``√3 δ`` times the surface's area
+    (first order; the terms in ``δ²`` are below 1e-13 of it). The volume of the rounded mesh
+    is summed exactly, so that is the whole bound. Both meshes are first moved by
+    `exact_shift` (which changes no volume), so that ``δ`` is that of the scene's size, not
+    of its distance from the origin."""
+    shift = exact_shift(a[0], b[0])
+    VC, FC = _cgal_intersection_mesh((a[0] - shift, a[1]), (b[0] - shift, b[1]))
+    if not len(FC):
+        return 0.0, 0.0
+    delta = float(np.spacing(np.abs(VC).max())) / 2
+    p, q, r = VC[FC[:, 0]], VC[FC[:, 1]], VC[FC[:, 2]]
+    area = float(np.linalg.norm(np.cross(q - p, r - p), axis=1).sum()) / 2
+    return float(rational_volume(VC, FC)), 3**0.5 * delta * area * (1 + 1e-6)
 
 
 def rational_volume(V, F) -> Fraction:

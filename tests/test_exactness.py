@@ -19,7 +19,7 @@ from exactgrasp.geometry.manifold import to_manifold
 from exactgrasp.geometry.topology import edge_defects, split_nonmanifold
 from tests.conftest import box_arrays
 from tests.exact_reference import (
-    cgal_intersection_volume,
+    cgal_intersection,
     cgal_volume,
     rational_volume,
 )
@@ -124,11 +124,11 @@ def test_the_real_link_with_four_face_edges_matches_cgal(dip_link):
 
 def fuzz(every: int = 1, n_ball: int = 12, ball_subdivisions: int = 1):
     """Every ``every``-th scene of the family (``n_ball`` ball poses a scene), against CGAL:
-    (poses compared, mismatches, zeros within the bound where CGAL finds a sliver under it,
-    refused scenes with their messages)."""
+    (poses compared, mismatches, poses where the rounding of CGAL's output exceeds the rule's
+    tolerance, refused scenes with their messages)."""
     ball = trimesh.creation.icosphere(ball_subdivisions, radius=0.3)
     rng = np.random.default_rng(20261205)
-    compared, mismatches, zeros, refused = 0, [], 0, []
+    compared, mismatches, unmeasured, refused = 0, [], 0, []
     for k, (label, solid, obj, poses, volume) in enumerate(
         scenes(rng, (ball.vertices, ball.faces), n_ball)
     ):
@@ -142,29 +142,27 @@ def fuzz(every: int = 1, n_ball: int = 12, ball_subdivisions: int = 1):
             refused.append((label, str(exc)))
             continue
         P = np.eye(4)[None] if poses is None else poses
-        want = np.array(
-            [cgal_intersection_volume(solid, (obj[0] @ p[:3, :3].T + p[:3, 3], obj[1])) for p in P]
-        )
+        want, rounding = np.array(
+            [cgal_intersection(solid, (obj[0] @ p[:3, :3].T + p[:3, 3], obj[1])) for p in P]
+        ).T
         v = np.atleast_1d(got.volumes)
-        b = np.atleast_1d(got.bounds)
         err = np.abs(v - want)
         allowed = 1e-9 * np.maximum(want, 1e-6 * volume)
-        zero = (v == 0) & (want <= b)
-        zeros += int((zero & (err > allowed)).sum())
-        bad = (err > allowed) & ~zero
+        # Where libigl's rounding of CGAL's vertices exceeds the rule, CGAL cannot tell.
+        unmeasured += int((rounding > allowed).sum())
+        bad = err > allowed + rounding
         mismatches += [(label, i, v[i], want[i]) for i in np.flatnonzero(bad)]
         compared += len(P)
-    return compared, mismatches, zeros, refused
+    return compared, mismatches, unmeasured, refused
 
 
 @pytest.mark.slow
 def test_touching_solids_in_every_frame_match_cgal():
-    compared, mismatches, zeros, refused = fuzz(every=3)
+    compared, mismatches, unmeasured, refused = fuzz(every=3)
     assert compared >= 200
     assert mismatches == []
-    # Volumes under the kernel's certified bound read 0 (slivers of rounding far from the
-    # origin); a refusal names the place.
-    assert zeros <= 5
+    assert unmeasured == 0
+    # A refusal names the place.
     assert all("near (" in text or "translating the object by (" in text for _, text in refused)
 
 

@@ -1,7 +1,8 @@
 """The exact backend: certified intersection volumes, the plain boolean and the kernel.
 
 Modules by stage: `reference` (the plain boolean, the agreement rule), `intersector` (the
-array-level core), `backend` (the `Backend`), `tables` (the kernel's named tables), `grids` and
+array-level core; its result in `intersection`, its fallbacks in `extrapolate` and
+`arranged`), `backend` (the `Backend`), `tables` (the kernel's named tables), `grids` and
 `prepare` (built once per grasp), `pose` (the per-pose driver) with its stages `seeds` (with
 its `filters`), `search`, `pairs`, `classify` and `sums`, on `cells` and `predicates`; every
 tolerance in `tolerances`; the volume's derivatives in `moments` (what they are, the boolean
@@ -17,11 +18,8 @@ from exactgrasp.lazy import lazy_names
 if TYPE_CHECKING:
     from exactgrasp.backends.exact.backend import ExactBackend
     from exactgrasp.backends.exact.gradients import VolumeGradients
-    from exactgrasp.backends.exact.intersector import (
-        ExactIntersector,
-        Intersection,
-        repeated_poses,
-    )
+    from exactgrasp.backends.exact.intersection import Intersection
+    from exactgrasp.backends.exact.intersector import ExactIntersector, repeated_poses
     from exactgrasp.backends.exact.reference import FLOOR, RTOL, agrees, plain_error, plain_volumes
 
 __getattr__, __dir__ = lazy_names(
@@ -29,11 +27,8 @@ __getattr__, __dir__ = lazy_names(
     {
         "exactgrasp.backends.exact.backend": ("ExactBackend",),
         "exactgrasp.backends.exact.gradients": ("VolumeGradients",),
-        "exactgrasp.backends.exact.intersector": (
-            "ExactIntersector",
-            "Intersection",
-            "repeated_poses",
-        ),
+        "exactgrasp.backends.exact.intersection": ("Intersection",),
+        "exactgrasp.backends.exact.intersector": ("ExactIntersector", "repeated_poses"),
         "exactgrasp.backends.exact.reference": (
             "FLOOR",
             "RTOL",

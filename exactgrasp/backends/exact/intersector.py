@@ -27,13 +27,13 @@ import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from exactgrasp.backends import defaults
-from exactgrasp.backends.base import repeated_poses, resolve_jobs
+from exactgrasp.backends.base import repeat_error, repeated_poses, resolve_jobs
+from exactgrasp.backends.exact.arranged import arranged_volume, scene_rounding, shift_rounding
 from exactgrasp.backends.exact.culling import (
     bounding_sphere,
     bounds_apart,
@@ -45,6 +45,7 @@ from exactgrasp.backends.exact.culling import (
 )
 from exactgrasp.backends.exact.extrapolate import extrapolated
 from exactgrasp.backends.exact.grids import build_grid, cell_order, grid_cell, morton_order
+from exactgrasp.backends.exact.intersection import POSE_SOURCES, Intersection
 from exactgrasp.backends.exact.moment_sums import empty_moment_tables, moment_tables
 from exactgrasp.backends.exact.moments import face_sources, original_ids, shift_moments
 from exactgrasp.backends.exact.options import ExactOptions, check_options
@@ -58,10 +59,10 @@ from exactgrasp.backends.exact.prepare import (
 )
 from exactgrasp.backends.exact.reference import Mesh, solids
 from exactgrasp.backends.exact.tables import (
+    ARRANGED,
     CULLED,
     DEGENERATE,
     N_STATS,
-    OK,
     OVERFLOW,
     STAT_CELLS_INSIDE,
     STAT_CELLS_OUTSIDE,
@@ -77,9 +78,6 @@ from exactgrasp.backends.exact.tolerances import (
 from exactgrasp.geometry.bvh import MeshPair
 from exactgrasp.geometry.manifold import mesh_arrays, union_solids
 
-#: What `Intersection.pose_sources` says, indexed by the kernel's result code.
-POSE_SOURCES = np.empty(4, dtype="<U7")
-POSE_SOURCES[[OK, CULLED, DEGENERATE, OVERFLOW]] = ("kernel", "culled", "limit", "limit")
 #: Pieces per thread the distinct poses of a call are dealt into (interleaved, taken by
 #: whichever thread is free): they balance threads that run at different speeds and pace
 #: the progress callback, at the price of one kernel call each.
@@ -88,28 +86,6 @@ PIECES_PER_THREAD = 8
 PIECE_POSES = 32
 #: The moment tables of a call that wants volumes only.
 EMPTY_MOMENTS = empty_moment_tables()
-
-
-@dataclass(frozen=True)
-class Intersection:
-    """What `ExactIntersector.intersect` found for a stack of poses (see there).
-
-    Attributes
-    ----------
-    volumes : numpy.ndarray, shape poses.shape[:-2], float64
-        Intersection volumes (cubed canonical units).
-    volume_bounds : numpy.ndarray, same shape
-        ``|volume - true volume| <= bound``.
-    pose_sources : numpy.ndarray, same shape, str
-        ``"kernel"``, ``"culled"`` or ``"limit"``.
-    stats : dict
-        Counters of the call (poses, repeats, culled, limit, cells, pairs, threads, seconds).
-    """
-
-    volumes: np.ndarray
-    volume_bounds: np.ndarray
-    pose_sources: np.ndarray
-    stats: dict[str, Any]
 
 
 class ExactIntersector:
@@ -202,6 +178,9 @@ class ExactIntersector:
         # too (manifold3d's tolerance grows with the coordinates' magnitude), so that rounding
         # depends on the geometry's size, not on where it lies.
         self.origin = bounds_centre(hand_links)
+        self.shift_error = max(
+            shift_rounding(hand_links, self.origin), shift_rounding(object_bodies, self.origin)
+        )
         # Each link its own manifold3d original (a union's faces say their link, `moments`);
         # with ``faces`` each triangle's face id is its index, which a union's faces keep.
         links = solids(shifted(hand_links, self.origin), "hand link", faces)
@@ -352,6 +331,14 @@ class ExactIntersector:
             out[i], bounds[i], moments[i] = extrapolated(
                 samples, poses[i], int(codes[i]), self.size, self.areas, self.capacity, links
             )
+        # A volume read within its bound of zero (a sliver under the bound, or none): exact.
+        for i in np.flatnonzero((codes != CULLED) & (out == 0.0) & (bounds > 0.0)):
+            moved_by = scene_rounding(poses[i], self.shift_error, self.size, self.origin)
+            out[i], bounds[i] = arranged_volume(
+                self.hand_mesh.vertices, self.hand_mesh.faces, self.object_mesh.vertices,
+                self.object_mesh.faces, poses[i], moved_by, self.areas,
+            )  # fmt: skip
+            codes[i] = ARRANGED
         return out, bounds, codes, stats, moments
 
     def _kernel(self, poses: np.ndarray, capacity: int, with_moments: bool):
@@ -479,12 +466,14 @@ class ExactIntersector:
                     store(parts[futures[future]], future.result())
         pairs = stats[:, [STAT_PAIRS, STAT_CROSSING]].sum(0)
         out, bounds, codes, stats = out[back], bounds[back], codes[back], stats[back]
+        bounds += repeat_error(every, flat[back], self.areas, self.size)
         tot = stats.sum(0)
         stats_out = {
             "poses": len(every),
             "poses_repeated": len(every) - n,
             "poses_culled": int((codes == CULLED).sum()),
             "poses_limit": int(((codes == DEGENERATE) | (codes == OVERFLOW)).sum()),
+            "poses_arranged": int((codes == ARRANGED).sum()),
             "parts": len(self.hand_tables.parts) - 1,
             "threads": jobs,
             "parts_culled": int(tot[STAT_CELLS_OUTSIDE]),

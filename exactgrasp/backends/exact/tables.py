@@ -21,6 +21,9 @@ OK, CULLED, DEGENERATE, OVERFLOW = 0, 1, 2, 3
 #: A per-pose scratch table was too small: the driver enlarges it and computes the pose again
 #: (never returned by `pose.pose_volumes`).
 GROW = 4
+#: A volume the kernel read within its bound of zero, computed again in exact arithmetic
+#: (`arranged`; set by the intersector, never by the kernel).
+ARRANGED = 5
 #: Columns of the per-pose statistics array: face pairs evaluated, crossing pairs, hand parts
 #: classified vertex by vertex, parts classified whole inside, and outside.
 STAT_PAIRS, STAT_CROSSING, STAT_CELLS_TOUCHED, STAT_CELLS_INSIDE, STAT_CELLS_OUTSIDE = range(5)
