@@ -11,10 +11,12 @@ The exact volumes (`ExactIntersector`, broad phase None, and coal, which must ag
 bit) are compared with `plain_volumes` (manifold3d unions and one boolean a pose) on every
 near-touching pose and on some of the others.
 
-Reported per scene and in all: poses, poses against the reference, poses farther from it than
-the kernel's bound plus the reference's own error (1e-9 relative plus manifold3d's tolerance
-times both areas, four times over), non-zero volumes failing `agrees`, zeros where the
-reference is positive (overlaps within the kernel's bound) with the largest such reference
+Reported per scene and in all: poses, poses whose volume was within the kernel's bound of zero
+and was computed again from the exact arrangement, poses against the reference, poses farther
+from it than the kernel's bound plus the reference's own error (1e-9 relative plus
+manifold3d's tolerance times both areas, four times over), non-zero volumes failing `agrees`,
+zeros where the reference is positive (overlaps within the scene's rounding) with the largest
+such reference
 over the hand's volume, the largest relative difference among non-zero volumes, NaN or
 negative volumes, and whether the two broad phases agree.
 
@@ -150,6 +152,7 @@ def sweep(name: str, grasp: Grasp, args: argparse.Namespace, rng: np.random.Gene
         "scene": name,
         "poses": len(poses),
         "near_touching": len(near),
+        "arranged": int(result.stats["poses_arranged"]),
         "against_reference": len(checked),
         "beyond_bound": int((~(np.abs(mine - want) <= allowed)).sum()),
         "nonzero_failing_agrees": int(
@@ -186,7 +189,8 @@ def main(argv: list[str] | None = None) -> int:
         row = sweep(name, grasp, args, rng)
         rows.append(row)
         print(
-            f"{name:28s} poses {row['poses']:5d} (near-touching {row['near_touching']:3d}), "
+            f"{name:28s} poses {row['poses']:5d} (near-touching {row['near_touching']:3d}, "
+            f"arranged exactly {row['arranged']:3d}), "
             f"vs reference {row['against_reference']:3d}: beyond bound {row['beyond_bound']}, "
             f"non-zero failing agrees {row['nonzero_failing_agrees']}, zeros where the "
             f"reference is positive {row['zeros_reference_positive']} (largest "
@@ -195,9 +199,9 @@ def main(argv: list[str] | None = None) -> int:
             f"broad phases identical {row['broad_phases_identical']}, {row['seconds']:.0f} s",
             flush=True,
         )
-    total = {k: sum(r[k] for r in rows) for k in ("poses", "near_touching", "against_reference",
-             "beyond_bound", "nonzero_failing_agrees", "zeros_reference_positive",
-             "nan_or_negative")}  # fmt: skip
+    total = {k: sum(r[k] for r in rows) for k in ("poses", "near_touching", "arranged",
+             "against_reference", "beyond_bound", "nonzero_failing_agrees",
+             "zeros_reference_positive", "nan_or_negative")}  # fmt: skip
     total["largest_such_over_hand"] = max(r["largest_such_over_hand"] for r in rows)
     total["largest_relative_nonzero"] = max(r["largest_relative_nonzero"] for r in rows)
     total["broad_phases_identical"] = all(r["broad_phases_identical"] for r in rows)

@@ -30,6 +30,7 @@ from exactgrasp.grasp.grasp import Grasp
 
 __all__ = [
     "BURIED_FRACTION",
+    "CONTACT_SHARE",
     "FINGERS",
     "PUSH_MM",
     "ROTATION_SCALE",
@@ -42,9 +43,13 @@ __all__ = [
 #: A radian of rotation weighs as much as this many canonical units of translation (1: the
 #: palm-to-centre half-depth, so a radian moves a point at the grasp's centre about as far).
 ROTATION_SCALE = 1.0
-#: "In contact": the volume reads 0, and this push (mm) back along the separating direction
-#: penetrates.
+#: "In contact": the volume is at most `CONTACT_SHARE` of what this push (mm) back along the
+#: separating direction makes it, which is positive.
 PUSH_MM = 1.0
+#: The exact volume of surfaces put in contact by a computed pose is often a sliver (the pose
+#: composed into the grasp's frame rounds, and the volume is exact), not 0: this share of the
+#: push's volume (an overlap about a nanometre deep) still counts as contact.
+CONTACT_SHARE = 1e-6
 #: The largest Newton step, canonical units (translation) and radians (rotation).
 MAX_STEP = 0.25
 #: Samples per round of the bisection of the last step.
@@ -78,7 +83,8 @@ class Separation:
     volume_before : float
         The hand ∩ object volume of the input grasp, m^3.
     in_contact : bool
-        The volume reads 0 and a `PUSH_MM` push back along `direction` penetrates.
+        A `PUSH_MM` push back along `direction` penetrates, and the volume is at most
+        `CONTACT_SHARE` of what that push makes it.
     steps : int
         Gradient steps taken.
     direction : numpy.ndarray, shape (6,)
@@ -148,15 +154,14 @@ def _exact_backend(backend: str | ExactBackend) -> ExactBackend:
 
 
 def in_contact(grasp: Grasp, direction: np.ndarray, backend: str | ExactBackend = "exact") -> bool:
-    """Whether the grasp is in contact: its exact volume reads 0, and moving the object
-    `PUSH_MM` back along ``direction`` (a twist, canonical frame, separating sense)
-    penetrates."""
+    """Whether the grasp is in contact: moving the object `PUSH_MM` back along ``direction``
+    (a twist, canonical frame, separating sense) penetrates, and its exact volume is at most
+    `CONTACT_SHARE` of that push's (0, or a sliver of rounding)."""
     backend = _exact_backend(backend)
-    if _volumes(backend, grasp, np.eye(4)[None])[0] != 0:
-        return False
     push = PUSH_MM * 1e-3 * grasp.frame.scale * direction / _norm(direction)
     back = exp_se3(-push[3:], -push[:3])
-    return bool(_volumes(backend, grasp, back[None])[0] > 0)
+    here, pushed = _volumes(backend, grasp, np.stack([np.eye(4), back]))
+    return bool(pushed > 0 and here <= CONTACT_SHARE * pushed)
 
 
 def _opened(grasp: Grasp):

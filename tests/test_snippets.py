@@ -105,7 +105,7 @@ def test_the_tutorial_runs_as_written(tmp_path):
     # The figures the page quotes.
     page = (ROOT / "docs" / "tutorial.md").read_text()
     for line in (
-        "     voxel     0.39      0.02309     0.2234      1.047    0.0006354   0.9996     1     9",
+        "     voxel     0.39      0.02309     0.2234      1.047    0.0006354   0.9996     0     9",
         "can-0deg-3mm           nearest: can-10deg-3mm (0.008)",
         "juice_box-0deg-20mm    nearest: can-0deg-20mm (1.067)",
         "juice_box-0deg-3mm     max 0.279  warnings: 0",

@@ -27,7 +27,6 @@ from __future__ import annotations
 from collections import defaultdict
 from fractions import Fraction
 from functools import cmp_to_key
-from math import gcd
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -39,24 +38,33 @@ from exactgrasp.geometry.rational import centroid, orient2d, plane_of, side
 from exactgrasp.geometry.topology import edge_defects, format_point
 from exactgrasp.geometry.wedges import split_nonmanifold
 
-__all__ = ["level_volume", "solid_boundary"]
+__all__ = ["solid_boundary", "winding_regions"]
 
 _AXES = ((1, 2), (2, 0), (0, 1))
 
 
-def _merged(tiles) -> tuple[np.ndarray, np.ndarray, bool]:
+def _merged(tiles) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
     """Tiles on the same three points as one face with its net count: faces (k, 3) facing
-    the way of a positive count, counts (k,) > 0, and whether every tile stood alone."""
+    the way of a positive count, counts (k,) > 0, the input face of each one's first tile
+    (k,), and whether every tile stood alone."""
     net: dict[tuple[int, int, int], int] = defaultdict(int)
-    for a, b, c, _ in tiles:
+    first: dict[tuple[int, int, int], int] = {}
+    for a, b, c, f in tiles:
         key = tuple(sorted((a, b, c)))
         start = (a, b, c).index(key[0])
         even = (a, b, c)[(start + 1) % 3] == key[1]
         net[key] += 1 if even else -1
+        first.setdefault(key, f)
     alone = len(net) == len(tiles) and all(abs(v) == 1 for v in net.values())
     faces = [k if v > 0 else (k[0], k[2], k[1]) for k, v in net.items() if v]
     counts = [abs(v) for v in net.values() if v]
-    return np.array(faces, np.int64).reshape(-1, 3), np.array(counts, np.int64), alone
+    sources = [first[k] for k, v in net.items() if v]
+    return (
+        np.array(faces, np.int64).reshape(-1, 3),
+        np.array(counts, np.int64),
+        np.array(sources, np.int64),
+        alone,
+    )
 
 
 def _patches(faces: np.ndarray, n_points: int) -> tuple[int, np.ndarray]:
@@ -169,65 +177,45 @@ def _levels(cut, faces, counts, patch, n_patch) -> np.ndarray:
     return levels
 
 
-def _regions(vertices: np.ndarray, faces: np.ndarray):
-    """The cut surface's faces with the winding numbers on their two sides: (arrangement,
-    faces (k, 3) into its points, each face's patch (k,), each patch's (behind, in front)
-    winding numbers (n_patch, 2), whether every tile stood alone, faces split)."""
-    V = np.asarray(vertices, dtype=np.float64)
-    welded, inverse = np.unique(V, axis=0, return_inverse=True)
-    F = inverse.reshape(-1)[np.asarray(faces, dtype=np.int64)]
-    cut, tiles, tiled, n_cut = cut_exactly(welded, F)
-    G, counts, alone = _merged(tiles)
-    G = np.concatenate([F[~tiled], G])
-    counts = np.concatenate([np.ones(int((~tiled).sum()), np.int64), counts])
-    n_patch, patch = _patches(G, len(cut.points))
-    levels = _levels(cut, G, counts, patch, n_patch)
-    return cut, G, patch, levels, alone, n_cut
-
-
-def level_volume(vertices: np.ndarray, faces: np.ndarray, level: int) -> Fraction:
-    """The exact volume of the points where a closed surface's winding number is at least
-    ``level`` (>= 1).
-
-    Two closed surfaces whose winding numbers are 0 or 1 (2-manifolds, outward), given as one
-    surface, have winding number 2 exactly in their intersection: ``level=2`` gives the
-    intersection's volume.
+def winding_regions(vertices: np.ndarray, faces: np.ndarray):
+    """A closed surface cut along every contact, its faces with the winding numbers on their
+    two sides, exactly.
 
     Parameters
     ----------
     vertices : numpy.ndarray, shape (n, 3), float64
     faces : numpy.ndarray, shape (m, 3), int64
         A closed surface: every edge used as often in each direction.
-    level : int
 
     Returns
     -------
-    fractions.Fraction
-        The volume in the vertices' units cubed, exact (no rounding anywhere).
+    cut : exact_cut.Arrangement
+        The exact points.
+    G : numpy.ndarray, shape (k, 3), int64
+        The cut's faces, into ``cut.points`` (coincident tiles merged, facing the way most of
+        them face).
+    sources : numpy.ndarray, shape (k,), int64
+        The input face each lies in (for merged tiles, the first one's).
+    patch : numpy.ndarray, shape (k,), int64
+        Each face's patch.
+    levels : numpy.ndarray, shape (n_patch, 2), int64
+        Each patch's winding numbers (behind, in front).
+    alone : bool
+        Whether every tile stood alone (no coincident tiles).
+    n_cut : int
+        Input faces split.
     """
-    cut, G, patch, levels, _, _ = _regions(vertices, faces)
-    inside = levels >= level
-    sign = inside[:, 0].astype(np.int64) - inside[:, 1].astype(np.int64)
-    face_sign = sign[patch]
-    P = cut.points
-    total = 0
-    den = 1
-    for f in np.flatnonzero(face_sign).tolist():
-        a, b, c = G[f]
-        A, B, C = P[a], P[b], P[c]
-        # The tetrahedron (0, A, B, C) in homogeneous integers: det / (W_A W_B W_C).
-        det = (
-            A[0] * (B[1] * C[2] - B[2] * C[1])
-            - A[1] * (B[0] * C[2] - B[2] * C[0])
-            + A[2] * (B[0] * C[1] - B[1] * C[0])
-        )
-        w = A[3] * B[3] * C[3]
-        if face_sign[f] < 0:
-            det = -det
-        total, den = total * w + det * den, den * w
-        g = gcd(total, den)
-        total, den = total // g, den // g
-    return Fraction(total, 6 * den) * Fraction(2) ** (3 * cut.ints.exponent)
+    V = np.asarray(vertices, dtype=np.float64)
+    welded, inverse = np.unique(V, axis=0, return_inverse=True)
+    F = inverse.reshape(-1)[np.asarray(faces, dtype=np.int64)]
+    cut, tiles, tiled, n_cut = cut_exactly(welded, F)
+    G, counts, sources, alone = _merged(tiles)
+    G = np.concatenate([F[~tiled], G])
+    sources = np.concatenate([np.flatnonzero(~tiled), sources])
+    counts = np.concatenate([np.ones(int((~tiled).sum()), np.int64), counts])
+    n_patch, patch = _patches(G, len(cut.points))
+    levels = _levels(cut, G, counts, patch, n_patch)
+    return cut, G, sources, patch, levels, alone, n_cut
 
 
 def solid_boundary(
@@ -271,7 +259,7 @@ def solid_boundary(
         boundary cannot close without.
     """
     V_in, F_in = vertices, faces
-    cut, G, patch, levels, alone, n_cut = _regions(vertices, faces)
+    cut, G, _, patch, levels, alone, n_cut = winding_regions(vertices, faces)
     report = {
         "cut": n_cut,
         "changed": True,

@@ -7,24 +7,32 @@ far from the origin, or an object smaller than the bound inside the hand) reads 
 bound of zero, and the kernel cannot tell its size. Such a pose is computed again without
 rounding: the hand's surface and the moved object's, given as one closed surface, have
 winding number 2 exactly where both solids are (each is a 2-manifold, winding number 0 or 1),
-and `exactgrasp.geometry.exact_solid.level_volume` gives that set's volume exactly from the
-surfaces' exact arrangement. The object is moved with the kernel's own arithmetic
-(`pose.move_object`), so the scene is the one the kernel read; the one rounding is the
-volume's, to the nearest float.
+and `exactgrasp.geometry.level_sets.level_set` gives that set's volume exactly from the
+surfaces' exact arrangement, with its boundary's triangles, whose moments
+(`arranged_moments`) give the volume's derivatives there as the kernel's would. The object
+is moved with the kernel's own arithmetic (`pose.move_object`), so the scene is the one the
+kernel read; the one rounding is the volume's, to the nearest float.
 
 That scene is the given one up to the rounding that took it into local coordinates and moved
 the object there (`scene_rounding`), which the bound adds as both surfaces' areas times the
 farthest a vertex can have moved: 0 where that rounding is none (a scene whose shift to local
-coordinates is exact, the object at the identity pose).
+coordinates is exact, the object at the identity pose). A volume within that term of zero is
+no more certain than 0 and reads 0, as contacts do in the kernel.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from exactgrasp.geometry.exact_solid import level_volume
+from exactgrasp.geometry.level_sets import LevelSet, level_set
 
-__all__ = ["arranged_volume", "moved_like_the_kernel", "scene_rounding", "shift_rounding"]
+__all__ = [
+    "arranged_moments",
+    "arranged_volume",
+    "moved_like_the_kernel",
+    "scene_rounding",
+    "shift_rounding",
+]
 
 #: Unit roundoff of float64.
 U = 2.0**-53
@@ -56,7 +64,7 @@ def arranged_volume(
     pose: np.ndarray,
     moved_by: float = 0.0,
     area: float = 0.0,
-) -> tuple[float, float]:
+) -> tuple[float, float, LevelSet]:
     """The volume of hand ∩ (pose · object), exactly, and the bound of its one rounding.
 
     Parameters
@@ -75,13 +83,59 @@ def arranged_volume(
     -------
     volume, bound : float
         The exact volume rounded to the nearest float (cubed units), and its bound: half a
-        unit in its last place, plus ``moved_by * area``.
+        unit in its last place, plus ``moved_by * area``. A volume no larger than
+        ``moved_by * area`` is 0, with twice that as its bound.
+    found : exactgrasp.geometry.level_sets.LevelSet
+        The intersection; its triangles' sources number the hand's faces first, then the
+        object's.
     """
     moved = moved_like_the_kernel(object_vertices, pose)
     V = np.concatenate([hand_vertices, moved])
     F = np.concatenate([hand_faces, np.asarray(object_faces, np.int64) + len(hand_vertices)])
-    volume = float(level_volume(V, F, 2))
-    return volume, float(np.spacing(volume)) / 2 + moved_by * area
+    found = level_set(V, F, 2)
+    volume = float(found.volume)
+    rounding = moved_by * area
+    if volume <= rounding:
+        # No larger than what rounding the scene may have made: 0 is as true, and a contact
+        # reads 0 as the kernel's do.
+        return 0.0, 2.0 * rounding, LevelSet(found.volume, found.triangles[:0], found.sources[:0])
+    return volume, float(np.spacing(volume)) / 2 + rounding, found
+
+
+def arranged_moments(
+    found: LevelSet, hand_faces: int, face_link: np.ndarray, object_from: int, rows: int
+) -> np.ndarray:
+    """The moments ``(∫ n dA, ∫ x × n dA)`` of the intersection's boundary, by the kernel's
+    rows: each link's boundary inside the object (the triangles on hand faces, by
+    ``face_link``) and, from row ``object_from`` (where it is not -1), each object face's
+    part inside the hand.
+
+    Parameters
+    ----------
+    found : LevelSet
+        `arranged_volume`'s intersection.
+    hand_faces : int
+        The hand's faces (the object's are numbered after them).
+    face_link : numpy.ndarray, shape (hand_faces,), int64
+        The row of each hand face (`tables.MomentTables.face_link`).
+    object_from : int
+    rows : int
+
+    Returns
+    -------
+    numpy.ndarray, shape (rows, 6), float64
+        Local coordinates, length units squared and cubed.
+    """
+    T = found.triangles
+    # A flat triangle's ∫ n dA is its area vector, and ∫ x × n dA its centroid × that.
+    area = 0.5 * np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    both = np.hstack([area, np.cross(T.mean(axis=1), area)])
+    out = np.zeros((rows, 6))
+    hand = found.sources < hand_faces
+    np.add.at(out, face_link[found.sources[hand]], both[hand])
+    if object_from >= 0:
+        np.add.at(out, object_from + found.sources[~hand] - hand_faces, both[~hand])
+    return out
 
 
 def shift_rounding(meshes, origin: np.ndarray) -> float:

@@ -33,7 +33,12 @@ import numpy as np
 
 from exactgrasp.backends import defaults
 from exactgrasp.backends.base import repeat_error, repeated_poses, resolve_jobs
-from exactgrasp.backends.exact.arranged import arranged_volume, scene_rounding, shift_rounding
+from exactgrasp.backends.exact.arranged import (
+    arranged_moments,
+    arranged_volume,
+    scene_rounding,
+    shift_rounding,
+)
 from exactgrasp.backends.exact.culling import (
     bounding_sphere,
     bounds_apart,
@@ -334,11 +339,16 @@ class ExactIntersector:
         # A volume read within its bound of zero (a sliver under the bound, or none): exact.
         for i in np.flatnonzero((codes != CULLED) & (out == 0.0) & (bounds > 0.0)):
             moved_by = scene_rounding(poses[i], self.shift_error, self.size, self.origin)
-            out[i], bounds[i] = arranged_volume(
+            out[i], bounds[i], found = arranged_volume(
                 self.hand_mesh.vertices, self.hand_mesh.faces, self.object_mesh.vertices,
                 self.object_mesh.faces, poses[i], moved_by, self.areas,
             )  # fmt: skip
             codes[i] = ARRANGED
+            if links:
+                mom = self.moment_tables
+                moments[i] = arranged_moments(
+                    found, len(self.hand_mesh.faces), mom.face_link, int(mom.object_from[0]), links
+                )
         return out, bounds, codes, stats, moments
 
     def _kernel(self, poses: np.ndarray, capacity: int, with_moments: bool):
