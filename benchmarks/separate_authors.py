@@ -12,6 +12,10 @@ sampler and backend) ours-theirs against raw-theirs. The last line counts the re
 separated, in contact, and closer to theirs than the raw record (of all 34: a refused record
 counts as not closer). ``--limit N`` and ``--grasps STEM ...`` take a subset.
 
+`compare_method` puts another method beside ``separate`` on the same records, in the same
+terms (``python examples/penetration_descent.py --compare``: gradient descent on the exact
+volume).
+
 Batch (``--batch``): ``separate`` over every raw record of ``study-records/index.csv`` (or
 every N-th, ``--every N``); its success rate (separated and in contact) and seconds per
 record, written as it goes. FoodClip's open mesh is repaired on loading.
@@ -76,13 +80,41 @@ def adjusted_paths(data: Path, limit: int | None = None, grasps=None) -> list[Pa
     return paths[:limit]
 
 
+def record_pair(path: Path, data: Path):
+    """``(raw, theirs)``: the raw record an adjusted grasp was made from, and the adjusted
+    grasp of file ``path``."""
+    import exactgrasp as eg
+
+    theirs = eg.Grasp.from_file(path)
+    raw = eg.Grasp.from_file(data / RAW / "CerealBox" / f"{raw_name(path.stem)}.json")
+    return raw, theirs
+
+
+def against_theirs(ours, raw, theirs, d_raw=None, d_theirs=None) -> dict:
+    """How far ``ours`` (a grasp made from the raw record) and the raw record lie from theirs:
+    object pose (centroid mm, rotation degrees), largest joint difference (rad) and descriptor
+    L2 (library defaults), each as ``ours_theirs_*`` and ``raw_theirs_*``. ``d_raw`` and
+    ``d_theirs``: the raw record's and their descriptors, where already computed."""
+    import exactgrasp as eg
+
+    d_raw = eg.compute_descriptor(raw) if d_raw is None else d_raw
+    d_theirs = eg.compute_descriptor(theirs) if d_theirs is None else d_theirs
+    return {
+        "ours_theirs_pose": pose_difference(ours, theirs),
+        "raw_theirs_pose": pose_difference(raw, theirs),
+        "ours_theirs_joint_rad": joint_difference(ours, theirs),
+        "raw_theirs_joint_rad": joint_difference(raw, theirs),
+        "ours_theirs_l2": eg.distance(eg.compute_descriptor(ours), d_theirs),
+        "raw_theirs_l2": eg.distance(d_raw, d_theirs),
+    }
+
+
 def compare_one(path: Path, data: Path, fingers: str, rotation: bool) -> dict:
     """One adjusted grasp's row: its raw record separated (``fingers="default"``: with the
     library's defaults) and compared with it and with the raw record."""
     import exactgrasp as eg
 
-    theirs = eg.Grasp.from_file(path)
-    raw = eg.Grasp.from_file(data / RAW / "CerealBox" / f"{raw_name(path.stem)}.json")
+    raw, theirs = record_pair(path, data)
     options = {} if fingers == "default" else {"fingers": fingers}
     t0 = time.perf_counter()
     try:
@@ -90,8 +122,6 @@ def compare_one(path: Path, data: Path, fingers: str, rotation: bool) -> dict:
     except eg.SeparationError as exc:
         return {"grasp": path.stem, "error": str(exc)}
     seconds = time.perf_counter() - t0
-    ours = result.grasp
-    d_raw, d_ours, d_theirs = (eg.compute_descriptor(g) for g in (raw, ours, theirs))
     return {
         "grasp": path.stem,
         "seconds": seconds,
@@ -100,12 +130,7 @@ def compare_one(path: Path, data: Path, fingers: str, rotation: bool) -> dict:
         "in_contact": result.in_contact,
         "moved_mm": result.translation_mm,
         "turned_deg": result.rotation_deg,
-        "ours_theirs_pose": pose_difference(ours, theirs),
-        "raw_theirs_pose": pose_difference(raw, theirs),
-        "ours_theirs_joint_rad": joint_difference(ours, theirs),
-        "raw_theirs_joint_rad": joint_difference(raw, theirs),
-        "ours_theirs_l2": eg.distance(d_ours, d_theirs),
-        "raw_theirs_l2": eg.distance(d_raw, d_theirs),
+        **against_theirs(result.grasp, raw, theirs),
     }
 
 
@@ -164,6 +189,133 @@ def compare(
         f"difference ours {np.median([r['ours_theirs_joint_rad'] for r in done]):.3f} rad, raw "
         f"{np.median([r['raw_theirs_joint_rad'] for r in done]):.3f} rad"
     )
+
+
+# -- another method beside `separate`: the gradient descent of examples/penetration_descent.py
+
+#: The table of `compare_method`: (key of an outcome, label, how the records are summed up).
+ROWS = (
+    ("removed", "penetration removed (hand ∩ object exactly 0)", "count"),
+    ("loss_mm3", "Σ over links of link ∩ object after, mm³", "max"),
+    ("closer", "closer to theirs than the raw record (descriptor L2)", "count"),
+    ("l2", "descriptor L2 to theirs, mean", "mean"),
+    ("l2_ratio", "descriptor L2 to theirs / the raw record's", "spread"),
+    ("moved_mm", "object's centroid moved from the raw record, mm", "spread"),
+    ("turned_deg", "object turned from the raw record, degrees", "spread"),
+    ("joints_rad", "largest joint change from the raw record, rad", "spread"),
+    ("theirs_mm", "object's centroid to theirs, mm", "spread"),
+    ("theirs_rad", "largest joint difference to theirs, rad", "spread"),
+    ("seconds", "seconds per record", "spread"),
+    ("evaluations", "loss evaluations (volume and gradient of every link)", "spread"),
+)
+
+
+def outcome(ours, raw, theirs, seconds: float, links, refs) -> dict:
+    """One method's figures on one record (the keys of `ROWS`, ``volume`` and ``raw``, the
+    raw record's): the volumes left (``links(grasp)``: each link's volume ∩ the object),
+    the change from the raw record, how far from theirs (``refs``: the raw record's and
+    their descriptors)."""
+    import exactgrasp as eg
+
+    far = against_theirs(ours, raw, theirs, *refs)
+    volume = float(eg.intersection_volume(ours))
+    return {
+        "volume": volume,
+        "removed": volume == 0.0,
+        "loss_mm3": float(sum(links(ours))) * 1e9,
+        "closer": far["ours_theirs_l2"] < far["raw_theirs_l2"],
+        "l2": far["ours_theirs_l2"],
+        "l2_ratio": far["ours_theirs_l2"] / far["raw_theirs_l2"],
+        "moved_mm": pose_difference(ours, raw)[0],
+        "turned_deg": pose_difference(ours, raw)[1],
+        "joints_rad": joint_difference(ours, raw),
+        "theirs_mm": far["ours_theirs_pose"][0],
+        "theirs_rad": far["ours_theirs_joint_rad"],
+        "seconds": seconds,
+        "raw": {
+            "loss_mm3": float(sum(links(raw))) * 1e9,
+            "l2": far["raw_theirs_l2"],
+            "theirs_mm": far["raw_theirs_pose"][0],
+            "theirs_rad": far["raw_theirs_joint_rad"],
+        },
+    }
+
+
+def compare_method_one(path: Path, data: Path, method, links) -> dict:
+    """One adjusted grasp's raw record given to ``method`` (a grasp -> (grasp, loss
+    evaluations)) and to `separate` with the library's defaults, each compared with theirs:
+    ``{"grasp": stem, "method": outcome, "separate": outcome or {"error": message}}``."""
+    import exactgrasp as eg
+
+    raw, theirs = record_pair(path, data)
+    refs = (eg.compute_descriptor(raw), eg.compute_descriptor(theirs))
+    row = {"grasp": path.stem}
+    t0 = time.perf_counter()
+    ours, evaluations = method(raw)
+    row["method"] = outcome(ours, raw, theirs, time.perf_counter() - t0, links, refs)
+    row["method"]["evaluations"] = evaluations
+    t0 = time.perf_counter()
+    try:
+        separated = eg.separate(raw).grasp
+    except eg.SeparationError as exc:
+        row["separate"] = {"error": str(exc)}
+    else:
+        row["separate"] = outcome(separated, raw, theirs, time.perf_counter() - t0, links, refs)
+    return row
+
+
+def _cell(values: list, how: str, n: int) -> str:
+    import numpy as np
+
+    if not values:
+        return ""
+    v = np.asarray(values, dtype=float)
+    if how == "count":
+        return f"{int(v.sum())} of {n}"
+    if how == "max":
+        return f"{v.max():.3g}" + ("" if v.max() == 0 else f" (median {np.median(v):.3g})")
+    if how == "mean":
+        return f"{v.mean():.3f}"
+    return f"{np.median(v):.3g} ({v.min():.3g}-{v.max():.3g})"
+
+
+def method_table(rows: list[dict], name: str) -> str:
+    """`compare_method`'s table (Markdown): per method, counts of records, or medians with
+    their ranges, as `ROWS` says; the method's column is headed ``name``."""
+    columns = {
+        name: [r["method"] for r in rows],
+        "`separate(raw)`, defaults": [r["separate"] for r in rows if "error" not in r["separate"]],
+        "raw record": [r["method"]["raw"] for r in rows],
+    }
+    lines = ["| | " + " | ".join(columns) + " |", "|---" * (len(columns) + 1) + "|"]
+    for key, label, how in ROWS:
+        cells = [_cell([o[key] for o in c if key in o], how, len(rows)) for c in columns.values()]
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def compare_method(data: Path, method, links, name: str, limit=None, out=None) -> list[dict]:
+    """`compare_method_one` over the adjusted cereal-box grasps (the first ``limit``), one
+    line each as it goes, then `method_table`; the rows are written to ``out`` (JSON) as
+    they come."""
+    rows = []
+    for path in adjusted_paths(data, limit):
+        rows.append(compare_method_one(path, data, method, links))
+        cells = [
+            f"{m} "
+            + (
+                o.get("error")
+                or f"volume {o['volume']:.3g} m^3, L2 {o['l2']:.3f}, {o['seconds']:.1f} s"
+            )
+            for m, o in rows[-1].items()
+            if m != "grasp"
+        ]
+        raw_l2 = rows[-1]["method"]["raw"]["l2"]
+        print(f"{path.stem}: " + "; ".join(cells) + f"; raw L2 {raw_l2:.3f}", flush=True)
+        if out:
+            out.write_text(json.dumps(rows, indent=1))
+    print(method_table(rows, name))
+    return rows
 
 
 def batch(data: Path, fingers: str, limit: int | None, every: int, out: Path | None) -> None:
