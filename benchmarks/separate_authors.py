@@ -205,16 +205,17 @@ ROWS = (
     ("joints_rad", "largest joint change from the raw record, rad", "spread"),
     ("theirs_mm", "object's centroid to theirs, mm", "spread"),
     ("theirs_rad", "largest joint difference to theirs, rad", "spread"),
-    ("seconds", "seconds per record", "spread"),
+    ("seconds", "seconds per record (wall)", "spread"),
+    ("cpu_seconds", "CPU seconds per record (every thread)", "spread"),
     ("evaluations", "loss evaluations (volume and gradient of every link)", "spread"),
 )
 
 
-def outcome(ours, raw, theirs, seconds: float, links, refs) -> dict:
+def outcome(ours, raw, theirs, seconds: tuple[float, float], links, refs) -> dict:
     """One method's figures on one record (the keys of `ROWS`, ``volume`` and ``raw``, the
     raw record's): the volumes left (``links(grasp)``: each link's volume ∩ the object),
     the change from the raw record, how far from theirs (``refs``: the raw record's and
-    their descriptors)."""
+    their descriptors); ``seconds``: the method's (wall, CPU)."""
     import exactgrasp as eg
 
     far = against_theirs(ours, raw, theirs, *refs)
@@ -231,7 +232,8 @@ def outcome(ours, raw, theirs, seconds: float, links, refs) -> dict:
         "joints_rad": joint_difference(ours, raw),
         "theirs_mm": far["ours_theirs_pose"][0],
         "theirs_rad": far["ours_theirs_joint_rad"],
-        "seconds": seconds,
+        "seconds": seconds[0],
+        "cpu_seconds": seconds[1],
         "raw": {
             "loss_mm3": float(sum(links(raw))) * 1e9,
             "l2": far["raw_theirs_l2"],
@@ -250,18 +252,28 @@ def compare_method_one(path: Path, data: Path, method, links) -> dict:
     raw, theirs = record_pair(path, data)
     refs = (eg.compute_descriptor(raw), eg.compute_descriptor(theirs))
     row = {"grasp": path.stem}
-    t0 = time.perf_counter()
+    clock = _Clock()
     ours, evaluations = method(raw)
-    row["method"] = outcome(ours, raw, theirs, time.perf_counter() - t0, links, refs)
+    row["method"] = outcome(ours, raw, theirs, clock.read(), links, refs)
     row["method"]["evaluations"] = evaluations
-    t0 = time.perf_counter()
+    clock = _Clock()
     try:
         separated = eg.separate(raw).grasp
     except eg.SeparationError as exc:
         row["separate"] = {"error": str(exc)}
     else:
-        row["separate"] = outcome(separated, raw, theirs, time.perf_counter() - t0, links, refs)
+        row["separate"] = outcome(separated, raw, theirs, clock.read(), links, refs)
     return row
+
+
+class _Clock:
+    """Wall and CPU (every thread of the process) seconds since made."""
+
+    def __init__(self):
+        self.wall, self.cpu = time.perf_counter(), time.process_time()
+
+    def read(self) -> tuple[float, float]:
+        return time.perf_counter() - self.wall, time.process_time() - self.cpu
 
 
 def _cell(values: list, how: str, n: int) -> str:

@@ -167,7 +167,16 @@ class TorchKinematics:
         Returns
         -------
         torch.Tensor, shape (n_links, 4, 4)
+
+        Raises
+        ------
+        TypeError
+            ``q`` is not float64 (its rounding would reach the links by 1e-8 m).
         """
+        if q.dtype != torch.float64:
+            raise TypeError(
+                f"q: dtype {q.dtype}; pass q.double() (the volume is exact in float64)"
+            )
         motions = []
         for kind, axis, anchor, index, ratio, offset, home in self.joints:
             value = offset + ratio * (q[index] if index is not None else 0.0)
