@@ -195,11 +195,12 @@ def compare(
 
 #: The table of `compare_method`: (key of an outcome, label, how the records are summed up).
 ROWS = (
-    ("removed", "penetration removed (hand ∩ object exactly 0)", "count"),
-    ("loss_mm3", "Σ over links of link ∩ object after, mm³", "max"),
+    ("removed", "hand ∩ object reads exactly 0 after (`intersection_volume(grasp)`)", "count"),
+    ("volume", "hand ∩ object after, m³: largest", "max"),
+    ("loss_mm3", "Σ over links of link ∩ object, mm³ (raw: before): largest (median)", "max"),
     ("closer", "closer to theirs than the raw record (descriptor L2)", "count"),
     ("l2", "descriptor L2 to theirs, mean", "mean"),
-    ("l2_ratio", "descriptor L2 to theirs / the raw record's", "spread"),
+    ("l2_ratio", "descriptor L2 to theirs / the raw record's: median (range)", "spread"),
     ("moved_mm", "object's centroid moved from the raw record, mm", "spread"),
     ("turned_deg", "object turned from the raw record, degrees", "spread"),
     ("joints_rad", "largest joint change from the raw record, rad", "spread"),

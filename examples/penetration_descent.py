@@ -15,12 +15,14 @@ at the point of the last step where it first does (`descend`).
 
     python examples/penetration_descent.py [GRASP.json ...] [--steps N] [--object-scale S]
     python examples/penetration_descent.py --compare [--limit N] [--json out.json]
+    python examples/penetration_descent.py --table out.json
 
 Without a file it runs on one raw cereal-box record of the shared data. ``--compare`` runs
 the descent and `exactgrasp.separate` (library defaults) on the 34 raw cereal-box records
 that ``benchmarks/separate_authors.py`` compares with the authors' contact-adjusted grasps,
 in that benchmark's terms, and prints the table of ``docs/penetration-volume.md`` ("Gradient
-descent on the exact volume, against `separate`"). Needs torch (the ``torch`` extra).
+descent on the exact volume, against `separate`"); ``--table`` prints that table again
+from the rows ``--json`` wrote. Needs torch (the ``torch`` extra).
 
 Long because it is one worked example a reader can copy whole: the kinematics, the loss, the
 descent and its command line.
@@ -29,6 +31,7 @@ descent and its command line.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from dataclasses import dataclass, field
@@ -60,6 +63,12 @@ MOMENTUM = 0.5
 #: overshoot of the next (up to `MAX_OVERSHOOT`), so the loss reaches an exact 0.
 SLOW = 0.5
 MAX_OVERSHOOT = 4.0
+#: The descent stops where the loss reads exactly 0. The library's volume of the whole
+#: grasp (the union of the links, in the canonical frame) is another rounding of the same
+#: geometry: where a link lies face on face with the object, one reads 0 within its certified
+#: bound and the other a few 1e-16 m^3. Removed means that volume is at most this fraction of
+#: the object's.
+TOLERANCE = 1e-12
 #: Samples per round of the search for contact along the last step, and where the rounds
 #: stop: the bracket's width times the step's largest parameter change.
 BRACKET = 16
@@ -456,13 +465,14 @@ def _report(name: str, result: Descent) -> None:
 def main(argv: list[str] | None = None) -> int:
     """The command line (see the module's docstring); returns the exit status."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
-    from separate_authors import RAW, compare_method
+    from separate_authors import RAW, compare_method, method_table
     from shared_data import add_data_options, data_or_skip
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("records", nargs="*", type=Path, help="grasp files (default: one record)")
     ap.add_argument("--compare", action="store_true", help="against separate, 34 records")
     ap.add_argument("--limit", type=int, default=None, help="--compare: the first N only")
+    ap.add_argument("--table", type=Path, help="print the table of --compare's --json file")
     ap.add_argument("--steps", type=int, default=MAX_STEPS, help="most loss evaluations")
     ap.add_argument("--object-scale", type=float, default=OBJECT_SCALE)
     ap.add_argument("--rotation", action=argparse.BooleanOptionalAction, default=True)
@@ -470,6 +480,10 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     options = {"rotation": args.rotation, "object_scale": args.object_scale}
     options["max_steps"] = args.steps
+    name = "gradient descent (this example)"
+    if args.table:
+        print(method_table(json.loads(args.table.read_text()), name))
+        return 0
     if args.records and not args.compare:
         for path in args.records:
             _report(path.stem, descend(eg.Grasp.from_file(path), **options))
@@ -486,7 +500,6 @@ def main(argv: list[str] | None = None) -> int:
         result = descend(raw, **options)
         return result.grasp, result.evaluations
 
-    name = "gradient descent (this example)"
     compare_method(data, method, link_volumes, name, args.limit, args.json)
     return 0
 
