@@ -24,7 +24,8 @@ record, written as it goes. FoodClip's open mesh is repaired on loading.
         [--limit N] [--grasps STEM ...] [--json out.json]
     python benchmarks/separate_authors.py --batch [--every N] [--limit N] [--json out.json]
 
-Needs the shared data folder; skips with a message when it is absent.
+Needs the shared data folder; skips with a message when it is absent. Long because it holds
+the three comparisons on the same records and their one set of measures.
 """
 
 from __future__ import annotations

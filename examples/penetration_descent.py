@@ -77,14 +77,7 @@ CONTACT_TOL = 1e-3
 
 def _skew(w: torch.Tensor) -> torch.Tensor:
     """The cross-product matrix (3, 3) of ``w`` (3,): ``_skew(w) @ x == w × x``."""
-    zero = torch.zeros((), dtype=torch.float64)
-    return torch.stack(
-        [
-            torch.stack([zero, -w[2], w[1]]),
-            torch.stack([w[2], zero, -w[0]]),
-            torch.stack([-w[1], w[0], zero]),
-        ]
-    )
+    return torch.linalg.cross(w.expand(3, 3), torch.eye(3, dtype=torch.float64), dim=1).T
 
 
 def _hinge(axis: torch.Tensor, anchor: torch.Tensor, angle: torch.Tensor) -> torch.Tensor:
@@ -96,6 +89,7 @@ def _hinge(axis: torch.Tensor, anchor: torch.Tensor, angle: torch.Tensor) -> tor
 
 
 def _rigid(r: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
+    """The rigid motion (4, 4) ``x -> r @ x + t``."""
     bottom = torch.tensor([[0.0, 0.0, 0.0, 1.0]], dtype=torch.float64)
     return torch.cat([torch.cat([r, t[:, None]], dim=1), bottom])
 
@@ -115,12 +109,13 @@ class TorchKinematics:
         The independent joints, in `Hand.joint_names` order (k).
     lower, upper : torch.Tensor, shape (k,)
         Joint limits, rad (m for a slide joint).
+    local, faces : tuple of torch.Tensor (n_l, 3) and of numpy.ndarray (m_l, 3)
+        Each link's mesh in its own frame (metres), in `Hand.link_names` order.
     """
 
     joint_names: tuple[str, ...]
     lower: torch.Tensor
     upper: torch.Tensor
-    q0: torch.Tensor
     #: Per joint of the model (coupled ones too), root first: (kind, axis, anchor, driver
     #: index or None, ratio, offset, q0 of the joint).
     joints: tuple
@@ -132,8 +127,14 @@ class TorchKinematics:
 
     @classmethod
     def of(cls, hand: eg.Hand) -> TorchKinematics:
-        """The kinematics of ``hand``'s model (its joint values play no part)."""
+        """The kinematics of ``hand``'s model (its joint values play no part); a `TypeError`
+        for a hand without a kinematic model (a rigid mesh)."""
         model = hand.model
+        if not hasattr(model, "joint_frames"):
+            raise TypeError(
+                f"hand {model.name!r} has no kinematic model to follow; pass a hand with "
+                "joints (eg.hands.barrett(), eg.Hand.from_urdf(...))"
+            )
         names = tuple(hand.joint_names)
         q0 = dict(model.default_joints)
         every = model.all_joint_values(q0)
@@ -157,7 +158,6 @@ class TorchKinematics:
             joint_names=names,
             lower=torch.tensor([model.joint_limits[n][0] for n in names], dtype=torch.float64),
             upper=torch.tensor([model.joint_limits[n][1] for n in names], dtype=torch.float64),
-            q0=torch.tensor([q0[n] for n in names], dtype=torch.float64),
             joints=tuple(joints),
             chains=chains,
             home=torch.from_numpy(model.link_poses(q0)),
@@ -222,16 +222,13 @@ class Problem:
     Attributes
     ----------
     kinematics : TorchKinematics
-    object_vertices : torch.Tensor, shape (n, 3)
+    object_vertices, object_faces : torch.Tensor (n, 3) and numpy.ndarray (m, 3)
         The object at the grasp's pose, hand frame, metres.
-    object_faces : numpy.ndarray, shape (m, 3)
     centre : torch.Tensor, shape (3,)
         The object's centroid there (what it turns about).
-    length : float
-        Metres one unit of the object's translation moves it.
-    radius : float
-        The farthest vertex from the centroid, metres (a rotation's unit moves it by
-        ``length``).
+    length, radius : float
+        Metres one unit of the object's translation moves it; the distance of its farthest
+        vertex from the centroid (a unit of rotation moves that vertex by ``length``).
     """
 
     kinematics: TorchKinematics
@@ -313,14 +310,10 @@ def link_volumes(grasp: eg.Grasp, backend="exact") -> list[float]:
     """Each link's volume ∩ the object (m^3), in `Hand.link_names` order: the loss's terms at
     the grasp as it is, from the hand's own posed links (the library's kinematics, not
     `TorchKinematics`)."""
-    solid = grasp.object
+    b, pose = (grasp.object.vertices, grasp.object.faces), grasp.object_pose
     return [
-        float(
-            eg.intersection_volume(
-                link, (solid.vertices, solid.faces), grasp.object_pose, backend=backend
-            )
-        )
-        for link in grasp.hand.link_arrays()
+        float(eg.intersection_volume(a, b, pose, backend=backend))
+        for a in grasp.hand.link_arrays()
     ]
 
 
@@ -453,18 +446,16 @@ def descend(
     )
 
 
-def _report(name: str, result: Descent) -> None:
-    print(
-        f"{name}: loss {result.losses[0] * 1e9:.6g} -> {result.losses[-1] * 1e9:.6g} mm^3 in "
-        f"{result.evaluations} evaluations, {result.seconds:.1f} s"
-        + ("" if result.removed else " (penetration left)"),
-        flush=True,
-    )
+def _report(name: str, r: Descent) -> None:
+    left = "" if r.removed else " (penetration left)"
+    print(f"{name}: loss {r.losses[0] * 1e9:.6g} -> {r.losses[-1] * 1e9:.6g} mm^3 in "
+          f"{r.evaluations} evaluations, {r.seconds:.1f} s{left}", flush=True)  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
     """The command line (see the module's docstring); returns the exit status."""
-    sys.path.insert(0, str(ROOT / "benchmarks"))
+    if str(ROOT / "benchmarks") not in sys.path:
+        sys.path.insert(0, str(ROOT / "benchmarks"))
     from separate_authors import RAW, compare_method, method_table
     from shared_data import add_data_options, data_or_skip
 

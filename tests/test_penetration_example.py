@@ -68,6 +68,13 @@ def test_torch_kinematics_are_the_library_s_on_the_records_hand(shared_data):
     _fk_matches(_record_hand(shared_data), seed=1)
 
 
+def test_a_rigid_hand_is_refused_naming_the_fix():
+    box = eg.objects.box((0.1, 0.1, 0.1))
+    hand = eg.Hand.from_meshes([box], frame=eg.HandFrame.identity())
+    with pytest.raises(TypeError, match=r"no kinematic model.*eg\.hands\.barrett\(\)"):
+        pd.TorchKinematics.of(hand)
+
+
 def test_torch_kinematics_gradient_is_the_joint_twist():
     # d(link vertex)/d(joint) is the joint's twist at that vertex: a hinge moves x at a × (x - p).
     hand = eg.hands.barrett({"finger_3_med_joint": 0.7, "finger_3_dist_joint": 0.3})
