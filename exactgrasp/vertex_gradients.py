@@ -20,7 +20,7 @@ import trimesh
 
 from exactgrasp.backends.base import check_poses
 from exactgrasp.backends.exact import ExactBackend
-from exactgrasp.backends.exact.face_gradients import side_gradients
+from exactgrasp.backends.exact.face_gradients import vertex_gradients, vertex_tables
 from exactgrasp.errors import MeshError
 from exactgrasp.geometry.intake import REPAIR, load_trimesh, unit_scale
 from exactgrasp.geometry.solid import Solid
@@ -30,7 +30,7 @@ from exactgrasp.overlap import ACCEPTED, ACCEPTED_MORE, _arrays, _exact_backend,
 
 __all__ = ["VertexGradients", "input_corners", "intersection_volume_gradients"]
 
-#: Bytes of moments one batch of poses may hold (poses are run in batches below it).
+#: Bytes of moments one batch of poses may list at most (poses are run in batches below it).
 BATCH_BYTES = 2**27
 
 
@@ -214,7 +214,7 @@ def intersection_volume_gradients(
     single = poses is None
     arr = check_poses(np.eye(4) if single else poses, name="poses")
     single = single or arr.ndim == 2
-    turn = np.eye(3)
+    turn = None
     if isinstance(a, Grasp):
         if b is not None:
             raise MeshError(f"b: got {type(b).__name__} beside a Grasp; pass the grasp alone.")
@@ -228,8 +228,8 @@ def intersection_volume_gradients(
         options = {"repair": bool(repair), "check_scale": check_scale}
         A, to_a = _side(a, "a", units_a, **options)
         B, to_b = _side(b, "b", units_b, **options)
-    volumes, ga, gb = _gradients(backend, (A, to_a), (B, to_b), arr.reshape(-1, 4, 4))
-    gb = gb @ turn  # a grasp's object: by its own vertices, before the grasp pose
+    # A grasp's object: by its own vertices, before the grasp pose (``turn``).
+    volumes, ga, gb = _gradients(backend, (A, to_a), (B, to_b), arr.reshape(-1, 4, 4), turn)
     shape = arr.shape[:-2]
     volumes = volumes.reshape(shape)
     ga, gb = ga.reshape(*shape, ga.shape[-2], 3), gb.reshape(*shape, gb.shape[-2], 3)
@@ -238,23 +238,20 @@ def intersection_volume_gradients(
     return VertexGradients(volumes, ga, gb)
 
 
-def _gradients(backend: ExactBackend, A: tuple, B: tuple, poses: np.ndarray):
+def _gradients(backend: ExactBackend, A: tuple, B: tuple, poses: np.ndarray, turn):
     """Volumes (k,) and the derivatives by the user's vertices of either side (k, n, 3);
-    ``A`` and ``B`` are `_side`'s (pairs, (corner targets, n))."""
+    ``A`` and ``B`` are `_side`'s (pairs, (corner targets, n)), ``turn`` (3, 3) or None the
+    rotation ``B``'s vertices were placed by (its derivatives are by them before it)."""
     k = len(poses)
     volumes = np.zeros(k)
-    outs = (np.zeros((k, A[1][1], 3)), np.zeros((k, B[1][1], 3)))
+    outs = (np.empty((k, A[1][1], 3)), np.empty((k, B[1][1], 3)))  # each pose written whole
     if k == 0:
         return volumes, *outs
     intersector = backend.intersector_of(A[0], B[0], faces=True)
-    hand_src, body_src = intersector.face_sources
-    mh = len(hand_src)
-    batch = max(1, BATCH_BYTES // (48 * intersector.moment_rows))
+    tables = vertex_tables(intersector, (A[0], A[1][0]), (B[0], B[1][0]), turn)
+    # Each pose lists at most every row once (`moment_entries`): batches bound the entries.
+    batch = max(1, BATCH_BYTES // (56 * intersector.moment_rows))
     for start in range(0, k, batch):
-        part = poses[start : start + batch]
-        at = slice(start, start + len(part))
-        volumes[at], rows = intersector.volume_moments(part)
-        sides = ((A, hand_src, rows[:, :mh], None), (B, body_src, rows[:, mh:], part))
-        for ((pairs, (targets, n)), src, side, moved), out in zip(sides, outs, strict=True):
-            out[at] = side_gradients(side, src, pairs, moved, targets, n)
+        at = slice(start, min(start + batch, k))
+        volumes[at] = vertex_gradients(intersector, tables, poses[at], outs[0][at], outs[1][at])
     return volumes, *outs

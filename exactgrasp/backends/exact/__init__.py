@@ -6,7 +6,9 @@ array-level core; its result in `intersection`, its fallbacks in `extrapolate` a
 `prepare` (built once per grasp), `pose` (the per-pose driver) with its stages `seeds` (with
 its `filters`), `search`, `pairs`, `classify` and `sums`, on `cells` and `predicates`; every
 tolerance in `tolerances`; the volume's derivatives in `moments` (what they are, the boolean
-reference), `moment_sums` (in the kernel) and `gradients` (`VolumeGradients`).
+reference), `moment_layout` (the tables, built once), `moment_sums` and `object_moments` (in
+the kernel), `moment_entries` (the rows each pose touched) and `gradients` (`VolumeGradients`)
+or `face_gradients` (by every vertex).
 """
 
 from __future__ import annotations

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from exactgrasp.backends.exact.tables import MomentTables
 from exactgrasp.geometry.level_sets import LevelSet, level_set
 
 __all__ = [
@@ -103,12 +104,13 @@ def arranged_volume(
 
 
 def arranged_moments(
-    found: LevelSet, hand_faces: int, face_link: np.ndarray, object_from: int, rows: int
+    found: LevelSet, hand_faces: int, tables: MomentTables, rows: int, pose: np.ndarray
 ) -> np.ndarray:
     """The moments ``(∫ n dA, ∫ x × n dA)`` of the intersection's boundary, by the kernel's
     rows: each link's boundary inside the object (the triangles on hand faces, by
-    ``face_link``) and, from row ``object_from`` (where it is not -1), each object face's
-    part inside the hand.
+    ``tables.face_link``) and, from row ``tables.object_from`` (where it is not -1), each
+    object face's part inside the hand, in the object's own frame as the kernel's
+    (`object_moments`: the triangles moved back by the pose's inverse).
 
     Parameters
     ----------
@@ -116,26 +118,33 @@ def arranged_moments(
         `arranged_volume`'s intersection.
     hand_faces : int
         The hand's faces (the object's are numbered after them).
-    face_link : numpy.ndarray, shape (hand_faces,), int64
-        The row of each hand face (`tables.MomentTables.face_link`).
-    object_from : int
+    tables : tables.MomentTables
+        The kernel's moment tables (``face_link``: the row of each hand face).
     rows : int
+    pose : numpy.ndarray, shape (4, 4)
+        The object's pose, in local coordinates.
 
     Returns
     -------
     numpy.ndarray, shape (rows, 6), float64
         Local coordinates, length units squared and cubed.
     """
-    T = found.triangles
-    # A flat triangle's ∫ n dA is its area vector, and ∫ x × n dA its centroid × that.
-    area = 0.5 * np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
-    both = np.hstack([area, np.cross(T.mean(axis=1), area)])
-    out = np.zeros((rows, 6))
     hand = found.sources < hand_faces
-    np.add.at(out, face_link[found.sources[hand]], both[hand])
+    out = np.zeros((rows, 6))
+    np.add.at(out, tables.face_link[found.sources[hand]], _triangle_moments(found.triangles[hand]))
+    object_from = int(tables.object_from[0])
     if object_from >= 0:
-        np.add.at(out, object_from + found.sources[~hand] - hand_faces, both[~hand])
+        R, t = pose[:3, :3], pose[:3, 3]
+        T = (found.triangles[~hand] - t) @ R
+        np.add.at(out, object_from + found.sources[~hand] - hand_faces, _triangle_moments(T))
     return out
+
+
+def _triangle_moments(T: np.ndarray) -> np.ndarray:
+    """``(∫ n dA, ∫ x × n dA)`` of triangles (t, 3, 3): a flat triangle's ∫ n dA is its area
+    vector, and ∫ x × n dA its centroid × that."""
+    area = 0.5 * np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    return np.hstack([area, np.cross(T.mean(axis=1), area)])
 
 
 def shift_rounding(meshes, origin: np.ndarray) -> float:

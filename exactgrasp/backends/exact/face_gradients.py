@@ -8,144 +8,198 @@ of ``i``), so
 ``dV/dx_i = Σ_f (∫_{f ∩ other} φ_i dA) n_f``,
 
 ``n_f`` the face's unit outward normal. ``φ_i`` is linear, so per face the area ``A`` and the
-first moment ``P = ∫ x dA`` of ``f ∩ other`` are enough. The kernel sums, per face of either
-union (`ExactIntersector` with ``faces=True``), ``F = ∫ n dA = n A`` and
-``M = ∫ x × n dA = P × n``, and ``P · n = d A`` (``d`` the face's plane offset), so
-``P = n × M + n d A``. Each face of a union lies in one input face (manifold3d face ids,
-`moments.face_sources`), whose pieces add up.
+first moment ``P = ∫ x dA`` of ``f ∩ other`` are enough, and the kernel sums, per face of
+either union (`ExactIntersector` with ``faces=True``), ``F = ∫ n dA = n A`` and
+``M = ∫ x × n dA = P × n``. For a face with corners ``(x_j, y, z)`` in turn (``a, b, c``;
+``N = (b - a) × (c - a)``),
+
+``∫ φ_j dA = ((z - y) × (P - A y)) · N / |N|² = (M · (z - y) + (F · n)((y × z) · n)) / |N|``
+
+(``P = n × M + n (n · P)`` and ``z - y`` lies in the face's plane): a fixed weight row per
+face and corner (`vertex_tables`) against the moments' row ``(F, M)``. Each face of a union
+lies in one input face (manifold3d face ids, `moments.face_sources`), whose pieces add up.
+The kernel lists only the rows a pose touched (`moment_entries`), and `vertex_sums` adds only
+those onto the vertices.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from exactgrasp.backends.exact.intersector import ExactIntersector
+from exactgrasp.compiling import kernel
 
 __all__ = [
-    "corner_integrals",
-    "face_moments",
+    "VertexTables",
+    "mesh_tables",
     "mesh_vertex_gradients",
-    "scatter_corners",
-    "side_gradients",
+    "vertex_gradients",
+    "vertex_sums",
+    "vertex_tables",
 ]
 
 
-def face_moments(
-    rows: np.ndarray,
-    sources: np.ndarray,
-    meshes: list[tuple[np.ndarray, np.ndarray]],
-    poses: np.ndarray | None = None,
-) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """Per input face that meets the other solid, the area and first moment of its part
-    inside it: only the rows that are not zero are read.
+class VertexTables(NamedTuple):
+    """Per row of an intersector's per-face moments (`ExactIntersector.face_sources`: the
+    hand's union's faces, then the object's), what its moments give each corner's vertex
+    (`vertex_tables`). ``L`` rows."""
 
-    Parameters
-    ----------
-    rows : numpy.ndarray, shape (k, r, 6)
-        Per pose and face of a union, ``(∫ n dA, ∫ x × n dA)`` in the frame of the fixed mesh
-        (`ExactIntersector.volume_moments` with ``faces=True``, one side's rows).
-    sources : numpy.ndarray, shape (r, 2) int
-        The (mesh, face) each row's face lies in (`ExactIntersector.face_sources`).
-    meshes : list of (V (n, 3), F (m, 3))
-        The input meshes (length units), in their own frame.
-    poses : numpy.ndarray, shape (k, 4, 4), optional
-        Rigid motions that put the meshes into the rows' frame (the moving side); None: the
-        meshes are in it already (the fixed side).
-
-    Returns
-    -------
-    list of (pose (t,) int, face (t,) int, moments (t, 4))
-        Per mesh, each (pose, face) met once: the area (squared length units), then the first
-        moment ``∫ x dA`` (cubed length units) in the mesh's own frame.
-    """
-    # A face met has F = n A != 0 (three strided tests: cheaper than one over all six).
-    pose, row = np.nonzero((rows[..., 0] != 0.0) | (rows[..., 1] != 0.0) | (rows[..., 2] != 0.0))
-    F, M = rows[pose, row, :3], rows[pose, row, 3:]
-    if poses is not None:
-        R, t = poses[pose, :3, :3], poses[pose, :3, 3]
-        # Into the mesh's frame: F_b = R^T F, M_b = R^T (M - t × F).
-        M = np.einsum("tji,tj->ti", R, M - np.cross(t, F))
-        F = np.einsum("tji,tj->ti", R, F)
-    out = []
-    for i, (V, Fc) in enumerate(meshes):
-        own = np.flatnonzero(sources[row, 0] == i)
-        face = sources[row[own], 1]
-        a, b, c = V[Fc[face, 0]], V[Fc[face, 1]], V[Fc[face, 2]]
-        N = np.cross(b - a, c - a)
-        length = np.linalg.norm(N, axis=1)
-        n = np.divide(N, length[:, None], out=np.zeros_like(N), where=length[:, None] > 0)
-        area = np.einsum("ij,ij->i", F[own], n)
-        first = np.cross(n, M[own]) + n * (np.einsum("ij,ij->i", n, a) * area)[:, None]
-        keys, back = np.unique(pose[own] * len(Fc) + face, return_inverse=True)
-        summed = np.zeros((len(keys), 4))
-        np.add.at(summed, back.reshape(-1), np.column_stack([area, first]))
-        out.append((keys // len(Fc), keys % len(Fc), summed))
-    return out
+    #: (L, 3, 6) float64: per corner ``j`` the row ``(((y × z) · n) n, z - y) / |N|`` of its
+    #: input face (local coordinates, the object's unmoved): ``∫ φ_j dA`` is its product with
+    #: the moments ``(F, M)`` of the face's part inside (0 for a face of no area).
+    weights: np.ndarray
+    #: (L, 3) float64: the input face's unit normal in the frame the derivatives are wanted in.
+    directions: np.ndarray
+    #: (L, 3) int64: the vertex (of its side's, numbered as the caller's) at each corner.
+    targets: np.ndarray
+    #: (1,) int64: the first of the object's rows.
+    object_from: np.ndarray
+    #: (1,) int64: the first part marker's row (`tables.MomentTables.part_from`).
+    part_from: np.ndarray
+    #: (parts + 1,) int64: CSR start of each part's entries in `part_targets`.
+    part_start: np.ndarray
+    #: (q,) int64: the hand vertices a part classified whole and inside moves the volume by.
+    part_targets: np.ndarray
+    #: (q, 3) float64: by how much (its entries' rows' corners summed; as `directions`).
+    part_vectors: np.ndarray
 
 
-def corner_integrals(V: np.ndarray, F: np.ndarray, moments: np.ndarray) -> np.ndarray:
-    """Per face and corner ``j``, ``(∫ φ_j dA) n_f`` over the face's part inside the other
-    solid, from its area and first moment.
-
-    Parameters
-    ----------
-    V : numpy.ndarray, shape (n, 3)
-        The mesh's vertices (length units).
-    F : numpy.ndarray, shape (t, 3)
-        The faces the moments are of (a face may come more than once, one per pose).
-    moments : numpy.ndarray, shape (t, 4)
-        `face_moments`' area and first moment per face (the mesh's frame).
-
-    Returns
-    -------
-    numpy.ndarray, shape (t, 3, 3)
-        Squared length units: the derivative of the volume by each corner's vertex, face by
-        face (a face of no area gives 0).
-    """
-    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+def _side_tables(pairs, sources, targets, origin):
+    """`VertexTables`' weights, unit normals and targets of one side's rows: ``pairs`` its
+    meshes (V, F), ``sources`` (r, 2) each row's (mesh, face), ``targets`` per mesh (m_i, 3)
+    vertex indices, ``origin`` (3,) the local origin."""
+    face_at = np.cumsum([0] + [len(F) for _, F in pairs])
+    vertex_at = np.cumsum([0] + [len(V) for V, _ in pairs])
+    face = face_at[sources[:, 0]] + sources[:, 1]
+    corner = np.concatenate([F + o for (_, F), o in zip(pairs, vertex_at, strict=False)])[face]
+    corners = np.concatenate([V for V, _ in pairs])[corner] - origin
+    target = np.concatenate(targets)[face].astype(np.int64)
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
     N = np.cross(b - a, c - a)
-    nn = np.einsum("ij,ij->i", N, N)
-    inv = np.divide(1.0, nn, out=np.zeros_like(nn), where=nn > 0)
-    unit = N * np.sqrt(inv)[:, None]
-    A, P = moments[:, :1], moments[:, 1:]
-    out = np.empty((len(F), 3, 3))
-    # φ_j(x) = ((z - y) × (x - y)) · N / |N|² for the corners (x_j, y, z) in turn.
+    norm = np.sqrt(np.einsum("ij,ij->i", N, N))
+    inv = np.divide(1.0, norm, out=np.zeros_like(norm), where=norm > 0)
+    n = N * inv[:, None]
+    weights = np.empty((len(face), 3, 6))
     for j, (y, z) in enumerate(((b, c), (c, a), (a, b))):
-        w = np.einsum("ij,ij->i", np.cross(z - y, P - A * y), N) * inv
-        out[:, j] = w[:, None] * unit
-    return out
+        s = np.einsum("ij,ij->i", np.cross(y, z), n) * inv
+        weights[:, j, :3] = n * s[:, None]
+        weights[:, j, 3:] = (z - y) * inv[:, None]
+    return weights, n, target
 
 
-def scatter_corners(
-    pose: np.ndarray, targets: np.ndarray, corners: np.ndarray, out: np.ndarray
-) -> None:
-    """Add per-corner vectors (t, 3, 3) of poses ``pose`` (t,) to ``out`` (k, n, 3) at the
-    vertices ``targets`` (t, 3) name."""
-    k, n = out.shape[:2]
-    index, back = np.unique((pose[:, None] * n + targets).reshape(-1), return_inverse=True)
-    flat = corners.reshape(-1, 3)
-    view = out.reshape(k * n, 3)
-    for d in range(3):
-        view[index, d] += np.bincount(back.reshape(-1), weights=flat[:, d], minlength=len(index))
+def vertex_tables(
+    intersector: ExactIntersector, hand: tuple, body: tuple, turn: np.ndarray | None = None
+) -> VertexTables:
+    """The `VertexTables` of an intersector built with ``faces=True``.
+
+    Parameters
+    ----------
+    intersector : ExactIntersector
+    hand, body : (list of (V (n, 3), F (m, 3)), list of (m_i, 3) int)
+        The meshes it was built from (length units, the body at its place) and, per mesh,
+        the vertex each face corner's derivative goes to (numbered over the side).
+    turn : numpy.ndarray, shape (3, 3), optional
+        The body's derivatives are wanted for its vertices before this rotation (``x -> turn
+        x``); None: as placed.
+    """
+    hand_src, body_src = intersector.face_sources
+    c = intersector.origin
+    wa, na, ta = _side_tables(hand[0], hand_src, hand[1], c)
+    wb, nb, tb = _side_tables(body[0], body_src, body[1], c)
+    if turn is not None:
+        nb = nb @ turn
+    mom = intersector.moment_tables
+    return VertexTables(
+        np.concatenate([wa, wb]),
+        np.concatenate([na, nb]),
+        np.concatenate([ta, tb]),
+        np.array([len(hand_src)], np.int64),
+        mom.part_from,
+        *_part_sums(mom, wa, na, ta),
+    )
 
 
-def side_gradients(
-    rows: np.ndarray,
-    sources: np.ndarray,
-    meshes: list[tuple[np.ndarray, np.ndarray]],
-    poses: np.ndarray | None,
-    targets: list[np.ndarray],
-    n: int,
+def _part_sums(mom, weights, directions, targets):
+    """Per part (`tables.MomentTables.part_start` ...), what its entries give each hand vertex
+    (`VertexTables.part_start`, ``part_targets``, ``part_vectors``), from the hand's rows'
+    ``weights``, ``directions`` and ``targets`` (`_side_tables`)."""
+    n_parts = len(mom.part_start) - 1
+    rows = mom.part_link
+    w = np.einsum("ecd,ed->ec", weights[rows], mom.part_moments)
+    vectors = (w[:, :, None] * directions[rows][:, None, :]).reshape(-1, 3)
+    n = int(targets.max()) + 1 if len(targets) else 1
+    part = np.repeat(np.arange(n_parts), np.diff(mom.part_start))
+    keys, back = np.unique((part[:, None] * n + targets[rows]).reshape(-1), return_inverse=True)
+    sums = np.zeros((len(keys), 3))
+    np.add.at(sums, back.reshape(-1), vectors)
+    start = np.zeros(n_parts + 1, np.int64)
+    np.cumsum(np.bincount(keys // n, minlength=n_parts), out=start[1:])
+    return start, (keys % n).astype(np.int64), sums
+
+
+@kernel(nogil=True, error_model="numpy")
+def vertex_sums(begin, end, rows, values, tables, out_a, out_b):
+    """Each pose's moments (`moment_entries.MomentEntries`: ``begin``, ``end``, ``rows``,
+    ``values``; local coordinates, the object's in its own frame) summed onto the vertices,
+    written to ``out_a`` (k, n_a, 3) (the hand's rows) and ``out_b`` (k, n_b, 3) (the
+    object's), every entry (a pose's zeros first, while its rows are in cache). A row whose
+    ``F`` is 0 is a face not met: skipped; a part's marker adds that part's sums
+    (`VertexTables.part_vectors`)."""
+    W, D, T = tables.weights, tables.directions, tables.targets
+    first_object, first_part = tables.object_from[0], tables.part_from[0]
+    ps, pt, pv = tables.part_start, tables.part_targets, tables.part_vectors
+    for i in range(begin.shape[0]):
+        out_a[i] = 0.0
+        out_b[i] = 0.0
+        for e in range(begin[i], end[i]):
+            r = rows[e]
+            if r >= first_part:
+                p = r - first_part
+                for q in range(ps[p], ps[p + 1]):
+                    for d in range(3):
+                        out_a[i, pt[q], d] += pv[q, d]
+                continue
+            if values[e, 0] == 0.0 and values[e, 1] == 0.0 and values[e, 2] == 0.0:
+                continue
+            out = out_b if r >= first_object else out_a
+            for j in range(3):
+                w = 0.0
+                for d in range(6):
+                    w += W[r, j, d] * values[e, d]
+                v = T[r, j]
+                for d in range(3):
+                    out[i, v, d] += w * D[r, d]
+
+
+def vertex_gradients(
+    intersector: ExactIntersector,
+    tables: VertexTables,
+    poses: np.ndarray,
+    out_a: np.ndarray,
+    out_b: np.ndarray,
 ) -> np.ndarray:
-    """The volume's derivative by every vertex of one side, (k, n, 3) in squared length units:
-    `face_moments` of its meshes, their `corner_integrals`, added onto the vertex each corner
-    goes to (``targets``: per mesh (m_i, 3) indices among the ``n``; a body's in its own
-    frame)."""
-    out = np.zeros((len(rows), n, 3))
-    moments = face_moments(rows, sources, meshes, poses)
-    for (V, F), (pose, face, m), target in zip(meshes, moments, targets, strict=True):
-        scatter_corners(pose, target[face], corner_integrals(V, F[face], m), out)
-    return out
+    """Volumes (k,) of poses (k, 4, 4), their derivatives by every vertex written to ``out_a``
+    (k, n_a, 3) and ``out_b`` (k, n_b, 3) (squared length units), as ``tables``
+    (`vertex_tables`) numbers and turns them."""
+    volumes, entries = intersector.moment_entries(poses)
+    vertex_sums(*entries, tables, out_a, out_b)
+    return volumes
+
+
+def mesh_tables(
+    intersector: ExactIntersector,
+    hand: list[tuple[np.ndarray, np.ndarray]],
+    bodies: list[tuple[np.ndarray, np.ndarray]],
+) -> VertexTables:
+    """`vertex_tables` of an intersector built with ``faces=True`` from ``hand`` and
+    ``bodies`` (lists of (V (n, 3), F (m, 3))), each side's vertices numbered in order."""
+    sides = []
+    for meshes in (hand, bodies):
+        offsets = np.cumsum([0] + [len(V) for V, _ in meshes])
+        sides.append((meshes, [F + o for (_, F), o in zip(meshes, offsets, strict=False)]))
+    return vertex_tables(intersector, sides[0], sides[1])
 
 
 def mesh_vertex_gradients(
@@ -153,6 +207,7 @@ def mesh_vertex_gradients(
     hand: list[tuple[np.ndarray, np.ndarray]],
     bodies: list[tuple[np.ndarray, np.ndarray]],
     poses: np.ndarray,
+    tables: VertexTables | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Volumes and the volume's derivative by every vertex of the hand's links and of the
     object's bodies (each in its own frame), for poses (k, 4, 4).
@@ -165,6 +220,8 @@ def mesh_vertex_gradients(
         The meshes it was built from (length units).
     poses : numpy.ndarray, shape (k, 4, 4)
         Checked rigid motions of the bodies.
+    tables : VertexTables, optional
+        `mesh_tables` of the same (made here where None).
 
     Returns
     -------
@@ -173,15 +230,8 @@ def mesh_vertex_gradients(
         The meshes' vertices in order, squared length units (volume per length of vertex
         motion); a body's in its own frame (``R^T`` of the derivative by its moved vertex).
     """
-    volumes, rows = intersector.volume_moments(poses)
-    hand_src, body_src = intersector.face_sources
-    mh = len(hand_src)
-    out = []
-    for meshes, src, part, moved in (
-        (hand, hand_src, rows[:, :mh], None),
-        (bodies, body_src, rows[:, mh:], poses),
-    ):
-        offsets = np.cumsum([0] + [len(V) for V, _ in meshes])
-        targets = [F + o for (_, F), o in zip(meshes, offsets[:-1], strict=True)]
-        out.append(side_gradients(part, src, meshes, moved, targets, int(offsets[-1])))
-    return volumes, out[0], out[1]
+    tables = mesh_tables(intersector, hand, bodies) if tables is None else tables
+    out_a = np.empty((len(poses), sum(len(V) for V, _ in hand), 3))
+    out_b = np.empty((len(poses), sum(len(V) for V, _ in bodies), 3))
+    volumes = vertex_gradients(intersector, tables, poses, out_a, out_b)
+    return volumes, out_a, out_b

@@ -13,7 +13,7 @@ The method (see ``docs/exact-backend.md``):
    any sign is uncertain (an exact coincidence of the surfaces) takes the volume's limit along
    a small translation from certified volumes nearby (`extrapolate`), or is refused.
 4. Where asked (`volume_moments`), the same pass also sums each link's surface moments, which
-   give the volume's derivatives (`moments`, `moment_sums`).
+   give the volume's derivatives (`moments`, `moment_layout`, `moment_sums`).
 
 Long because one class holds the build, the pose loop over threads and the fallback, for the
 volumes and their moments alike, and the intersector and its result (`Intersection`) document
@@ -33,6 +33,7 @@ import numpy as np
 
 from exactgrasp.backends import defaults
 from exactgrasp.backends.base import repeat_error, repeated_poses, resolve_jobs
+from exactgrasp.backends.exact import moment_entries as entries_of
 from exactgrasp.backends.exact.arranged import (
     arranged_moments,
     arranged_volume,
@@ -51,7 +52,7 @@ from exactgrasp.backends.exact.culling import (
 from exactgrasp.backends.exact.extrapolate import extrapolated
 from exactgrasp.backends.exact.grids import build_grid, cell_order, grid_cell, morton_order
 from exactgrasp.backends.exact.intersection import POSE_SOURCES, Intersection
-from exactgrasp.backends.exact.moment_sums import empty_moment_tables, moment_tables
+from exactgrasp.backends.exact.moment_layout import empty_moment_tables, moment_layout
 from exactgrasp.backends.exact.moments import face_sources, original_ids, shift_moments
 from exactgrasp.backends.exact.options import ExactOptions, check_options
 from exactgrasp.backends.exact.pose import pose_volumes
@@ -75,11 +76,7 @@ from exactgrasp.backends.exact.tables import (
     STAT_CROSSING,
     STAT_PAIRS,
 )
-from exactgrasp.backends.exact.tolerances import (
-    CULL_GAP,
-    LENGTH_FLOOR,
-    TINY_FACE,
-)
+from exactgrasp.backends.exact.tolerances import CULL_GAP, LENGTH_FLOOR, TINY_FACE
 from exactgrasp.geometry.bvh import MeshPair
 from exactgrasp.geometry.manifold import mesh_arrays, union_solids
 
@@ -216,10 +213,12 @@ class ExactIntersector:
         self.hand_mesh, self.hand_tables = hand_tables(
             prepare_mesh(AV, AF), self.hand_grid, self.tiny
         )
-        self.face_sources, self.moment_rows, self.moment_tables = self._moment_layout(
-            hand_src, original_ids(bodies) if faces else None, len(BF)
-        )
         self.object_mesh = prepare_mesh(BV, BF)
+        object_src = face_sources(self.object_solid, original_ids(bodies)) if faces else None
+        self.face_sources, self.moment_rows, self.moment_tables = moment_layout(
+            self.hand_mesh, self.hand_tables, hand_src, len(self.link_ids), object_src,
+            self.object_mesh,
+        )  # fmt: skip
         self.object_tables = object_tables(self.object_mesh)
         # Surfaces farther apart than this are certainly disjoint whatever the BVH's rounding.
         self.gap = CULL_GAP * scale
@@ -245,17 +244,6 @@ class ExactIntersector:
             "capacity": self.capacity,
         }
         self.areas = float(self.hand_solid.surface_area() + self.object_solid.surface_area())
-
-    def _moment_layout(self, hand_src: np.ndarray, body_ids: list | None, m_object: int):
-        """(`face_sources`, `moment_rows`, `moment_tables`): per link, or with the object's
-        bodies' ids (``faces``) one row per face of the hand's union, then of the object's."""
-        src, rows, start, link = None, len(self.link_ids), -1, hand_src[:, 0]
-        if body_ids is not None:
-            src = (hand_src, face_sources(self.object_solid, body_ids))
-            rows = start = len(hand_src)
-            link = np.arange(rows, dtype=np.int64)
-        tables = moment_tables(self.hand_mesh, self.hand_tables, link, rows, start)
-        return src, rows + (m_object if body_ids is not None else 0), tables
 
     def broad_phase(self, poses: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
         """What the broad phase knows of poses (k, 4, 4; local coordinates) before the kernel.
@@ -301,12 +289,12 @@ class ExactIntersector:
         crossing: np.ndarray | None = None,
         with_moments: bool = False,
     ):
-        """Volumes, bounds, codes, statistics and link moments (k, L, 6; L = 0 without
+        """Volumes, bounds, codes, statistics and `moment_entries.MomentEntries` (none without
         ``with_moments``) of poses (k, 4, 4) in local coordinates; ``apart`` and ``crossing``
         (k,) from `broad_phase` cull, None does not."""
         n = len(poses)
         links = self.moment_rows if with_moments else 0
-        moments = np.zeros((n, links, 6))
+        moments = entries_of.empty(n)
         out = np.zeros(n)
         bounds = np.zeros(n)
         codes = np.zeros(n, np.int64)
@@ -324,16 +312,18 @@ class ExactIntersector:
             todo[culled] = False
         idx = np.flatnonzero(todo)
         if len(idx):
-            out[idx], bounds[idx], codes[idx], stats[idx], moments[idx] = self._kernel(
+            out[idx], bounds[idx], codes[idx], stats[idx], found = self._kernel(
                 poses[idx], self.capacity, with_moments
             )
+            moments = entries_of.placed(found, idx, n)
 
         def samples(p: np.ndarray, capacity: int):
             o, b, c, _, mo = self._kernel(p, capacity, with_moments)
-            return o, b, c, mo
+            return o, b, c, entries_of.dense(mo, links, self.moment_tables)
 
+        limits = {}
         for i in np.flatnonzero((codes == DEGENERATE) | (codes == OVERFLOW)):
-            out[i], bounds[i], moments[i] = extrapolated(
+            out[i], bounds[i], limits[i] = extrapolated(
                 samples, poses[i], int(codes[i]), self.size, self.areas, self.capacity, links
             )
         # A volume read within its bound of zero (a sliver under the bound, or none): exact.
@@ -345,26 +335,25 @@ class ExactIntersector:
             )  # fmt: skip
             codes[i] = ARRANGED
             if links:
-                mom = self.moment_tables
-                moments[i] = arranged_moments(
-                    found, len(self.hand_mesh.faces), mom.face_link, int(mom.object_from[0]), links
+                limits[i] = arranged_moments(
+                    found, len(self.hand_mesh.faces), self.moment_tables, links, poses[i]
                 )
-        return out, bounds, codes, stats, moments
+        return out, bounds, codes, stats, entries_of.appended(moments, limits)
 
     def _kernel(self, poses: np.ndarray, capacity: int, with_moments: bool):
         """The kernel on poses (k, 4, 4) in local coordinates: volumes, bounds, codes,
-        statistics and link moments (k, L, 6; L = 0 without ``with_moments``)."""
+        statistics and `moment_entries.MomentEntries` (none without ``with_moments``)."""
         k = len(poses)
         o, b = np.zeros(k), np.zeros(k)
         c = np.zeros(k, np.int64)
         st = np.zeros((k, N_STATS), np.int64)
-        mo = np.zeros((k, self.moment_rows if with_moments else 0, 6))
-        pose_volumes(
+        start = np.zeros(k + 1, np.int64)
+        rows, values = pose_volumes(
             np.ascontiguousarray(poses), self.hand_mesh, self.hand_tables, self.hand_grid,
             self.object_mesh, self.object_tables, self.object_grid, self.tiny, capacity,
-            o, b, c, st, self.moment_tables if with_moments else EMPTY_MOMENTS, mo,
+            o, b, c, st, self.moment_tables if with_moments else EMPTY_MOMENTS, start,
         )  # fmt: skip
-        return o, b, c, st, mo
+        return o, b, c, st, entries_of.from_kernel(start, rows, values)
 
     def volumes(
         self, poses: np.ndarray, progress: Callable[[int], Any] | None = None
@@ -419,16 +408,25 @@ class ExactIntersector:
         """Volumes as `volumes`, and per link ``(∫ n dA, ∫ x × n dA)`` of its boundary inside
         the moved object, in the input frame: shapes ``poses.shape[:-2]`` and
         ``poses.shape[:-2] + (L, 6)`` (L links, in input order; zero where the volume reads
-        0). The derivatives they give are in `moments`."""
-        result, moments = self._run(poses, None, True)
-        flat = moments.reshape(-1, 6)  # a fresh array; rows with F = 0 need no shift
+        0). The derivatives they give are in `moments`. With ``faces``, one row per face
+        (`face_sources`), an object face's in the object's own frame (before the pose)."""
+        result, entries = self._run(poses, None, True)
+        moments = entries_of.dense(entries, self.moment_rows, self.moment_tables)
+        flat = moments.reshape(-1, 6)  # rows with F = 0 need no shift
         live = np.flatnonzero(flat[:, :3].any(axis=1))
         flat[live] = shift_moments(flat[live], self.origin)
-        return result.volumes, moments
+        return result.volumes, moments.reshape(*poses.shape[:-2], -1, 6)
+
+    def moment_entries(self, poses: np.ndarray):
+        """Volumes as `volumes` (k,) of poses (k, 4, 4), and the moments as
+        `moment_entries.MomentEntries` of the k poses, in local coordinates (about `origin`,
+        the object moved by ``x -> R x + (R c + t - c)``, ``c`` the origin)."""
+        result, entries = self._run(poses, None, True)
+        return result.volumes, entries
 
     def _run(self, poses, progress, with_moments):
-        """`intersect`'s result, and with ``with_moments`` the link moments (shape
-        ``+ (L, 6)``, local coordinates; else ``+ (0, 6)``)."""
+        """`intersect`'s result, and the `moment_entries.MomentEntries` of the poses, flat
+        (local coordinates; none without ``with_moments``)."""
         t0 = time.perf_counter()
         # The same motions about the local origin c: x -> R x + (R c + t - c); repeats are
         # found there, so that their tolerance scales with the local geometry.
@@ -451,7 +449,7 @@ class ExactIntersector:
         bounds = np.empty(n)
         codes = np.empty(n, np.int64)
         stats = np.empty((n, N_STATS), np.int64)
-        moments = np.empty((n, self.moment_rows if with_moments else 0, 6))
+        pieces = []
 
         def run(ix: np.ndarray):
             return self._chunk(
@@ -462,7 +460,8 @@ class ExactIntersector:
             )
 
         def store(ix: np.ndarray, result: tuple) -> None:
-            out[ix], bounds[ix], codes[ix], stats[ix], moments[ix] = result
+            out[ix], bounds[ix], codes[ix], stats[ix], entries = result
+            pieces.append((ix, entries))
             if progress is not None:
                 progress(int(weight[ix].sum()))
 
@@ -496,4 +495,4 @@ class ExactIntersector:
         shape = poses.shape[:-2]
         sources = POSE_SOURCES[codes].reshape(shape)
         result = Intersection(out.reshape(shape), bounds.reshape(shape), sources, stats_out)
-        return result, moments[back.reshape(-1)].reshape(*shape, -1, 6)
+        return result, entries_of.taken(entries_of.concatenated(pieces, n), back.reshape(-1))

@@ -1,134 +1,83 @@
 """The object's side of the volume's derivatives (numba): per object face, the moments
 ``(∫ n dA, ∫ x × n dA)`` of its part inside the hand, summed from what the volume's pass
-leaves behind, in local coordinates (the object moved by the pose).
+leaves behind, in the object's own frame (local coordinates, unmoved).
 
 They are the same sums as the hand's (`moment_sums`), made of the same pieces: an object
 face's boundary inside the hand runs along the pieces of its edges inside the hand and along
 the traced segments, which run ``q → p`` on the object face (``p → q`` on the hand face, see
 `search.trace_pairs`). For a piece ``p → q`` of a face with unit normal ``n`` and
-``c = n · (p × q)``: ``∫ n dA += n c / 2`` and ``∫ x × n dA += ((p + q) × n) c / 6``; along an
-edge ``u → v`` inside on parameter intervals ``[a, b]``, with ``f = Σ (b − a)`` and
-``h = Σ (b² − a²)``: ``n (n · w) f / 2`` and ``((2 f u + h (v − u)) × n)(n · w) / 6``,
-``w = u × v``, on the face holding ``u → v``, the opposite on the other. The object moves with
-each pose, so the shares are computed from its moved vertices and normals, not tabled. One row
-per object face gives the volume's derivative by every object vertex (`vertex_gradients`).
+``c = n · (p × q)``: ``∫ n dA += n c / 2`` and ``∫ x × n dA += ((p + q) × n) c / 6``; an
+edge's share inside the hand is, as the hand's, ``f`` times its whole share plus a
+correction (`moment_sums._add_interval_share`). Taken in the object's frame, the whole shares
+do not change with the pose: they are tabled (`tables.MomentTables.object_edge_moments`), and
+only the traced segments are moved there, by the pose's inverse. One row per object face
+gives the volume's derivative by every object vertex (`face_gradients`).
 """
 
 from __future__ import annotations
 
-import numpy as np
-
-from exactgrasp.backends.exact.sums import _order_by_key
-from exactgrasp.backends.exact.tables import SEGMENT_OBJECT_FACE, SEGMENT_P, SEGMENT_Q
+from exactgrasp.backends.exact.moment_sums import crossed_edge_moments, touch
+from exactgrasp.backends.exact.tables import (
+    EDGE_MOMENTS_T1,
+    EDGE_MOMENTS_T2,
+    MOMENT_COLUMNS,
+    SEGMENT_OBJECT_FACE,
+    SEGMENT_P,
+    SEGMENT_Q,
+)
 from exactgrasp.compiling import inner
 
 __all__ = ["object_moments"]
 
 
 @inner(nogil=True, error_model="numpy")
-def _unit(N, s):
-    """The unit normal of face ``s`` from its unnormalised normal ``N[s]`` (0 for a face of no
-    area: it adds nothing)."""
-    nx, ny, nz = N[s, 0], N[s, 1], N[s, 2]
-    r = np.sqrt(nx * nx + ny * ny + nz * nz)
-    if r == 0.0:
-        return 0.0, 0.0, 0.0
-    return nx / r, ny / r, nz / r
-
-
-@inner(nogil=True, error_model="numpy")
-def _add(G, r, nx, ny, nz, sx, sy, sz, a, b):
-    """Add ``n a`` to ``∫ n dA`` and ``(s × n) b`` to ``∫ x × n dA`` in row ``r`` of ``G``."""
-    G[r, 0] += nx * a
-    G[r, 1] += ny * a
-    G[r, 2] += nz * a
-    G[r, 3] += (sy * nz - sz * ny) * b
-    G[r, 4] += (sz * nx - sx * nz) * b
-    G[r, 5] += (sx * ny - sy * nx) * b
-
-
-@inner(nogil=True, error_model="numpy")
-def _piece(G, r, nx, ny, nz, px, py, pz, qx, qy, qz):
-    """Add the piece ``p → q`` of a face with unit normal ``n`` to row ``r`` of ``G``."""
+def _segment_piece(values, r, unit, s, R, t, segs, k):
+    """Add segment ``k`` (``segs``, local coordinates) to row ``r`` of ``values``: the piece
+    ``q → p`` of object face ``s`` (unit normal ``unit[s]`` in the object's frame), both ends
+    taken into the object's frame, ``x -> R^T (x - t)``."""
+    nx, ny, nz = unit[s, 0], unit[s, 1], unit[s, 2]
+    p, q = SEGMENT_Q, SEGMENT_P  # the object face runs q → p
+    ax, ay, az = segs[k, p] - t[0], segs[k, p + 1] - t[1], segs[k, p + 2] - t[2]
+    bx, by, bz = segs[k, q] - t[0], segs[k, q + 1] - t[1], segs[k, q + 2] - t[2]
+    px = R[0, 0] * ax + R[1, 0] * ay + R[2, 0] * az
+    py = R[0, 1] * ax + R[1, 1] * ay + R[2, 1] * az
+    pz = R[0, 2] * ax + R[1, 2] * ay + R[2, 2] * az
+    qx = R[0, 0] * bx + R[1, 0] * by + R[2, 0] * bz
+    qy = R[0, 1] * bx + R[1, 1] * by + R[2, 1] * bz
+    qz = R[0, 2] * bx + R[1, 2] * by + R[2, 2] * bz
     c = nx * (py * qz - pz * qy) + ny * (pz * qx - px * qz) + nz * (px * qy - py * qx)
-    _add(G, r, nx, ny, nz, px + qx, py + qy, pz + qz, c / 2.0, c / 6.0)
+    sx, sy, sz = px + qx, py + qy, pz + qz
+    a = c / 2.0
+    b = c / 6.0
+    values[r, 0] += nx * a
+    values[r, 1] += ny * a
+    values[r, 2] += nz * a
+    values[r, 3] += (sy * nz - sz * ny) * b
+    values[r, 4] += (sz * nx - sx * nz) * b
+    values[r, 5] += (sx * ny - sy * nx) * b
 
 
 @inner(nogil=True, error_model="numpy")
-def _edge_share(V, N, E, ET, e, f, h, G, row0):
-    """Add to both faces of edge ``e = u → v`` (rows ``row0 + face``) its share inside the
-    hand, from ``f = Σ (b − a)`` and ``h = Σ (b² − a²)`` over its inside intervals."""
-    u, v = E[e, 0], E[e, 1]
-    ux, uy, uz = V[u, 0], V[u, 1], V[u, 2]
-    dx, dy, dz = V[v, 0] - ux, V[v, 1] - uy, V[v, 2] - uz
-    wx = uy * V[v, 2] - uz * V[v, 1]
-    wy = uz * V[v, 0] - ux * V[v, 2]
-    wz = ux * V[v, 1] - uy * V[v, 0]
-    sx, sy, sz = 2.0 * f * ux + h * dx, 2.0 * f * uy + h * dy, 2.0 * f * uz + h * dz
-    for side in range(2):
-        t = ET[e, side]
-        nx, ny, nz = _unit(N, t)
-        c = nx * wx + ny * wy + nz * wz
-        if side == 1:
-            c = -c
-        _add(G, row0 + t, nx, ny, nz, sx, sy, sz, c * f / 2.0, c / 6.0)
-
-
-@inner(nogil=True, error_model="numpy")
-def _multi_crossed(V, N, E, ET, S, rec_e, rec_l, multi, nm, G, row0):
-    """The edges crossed more than once (records ``multi[:nm]``): each edge's parameters
-    sorted, its inside intervals from its lower vertex's status."""
-    key = np.empty(nm, np.int64)
-    for i in range(nm):
-        key[i] = rec_e[multi[i]]
-    order = _order_by_key(key)
-    lam = np.empty(nm)
-    i = 0
-    while i < nm:
-        e = key[order[i]]
-        j = i
-        while j < nm and key[order[j]] == e:
-            x = rec_l[multi[order[j]]]
-            m = j - i
-            while m > 0 and lam[m - 1] > x:
-                lam[m] = lam[m - 1]
-                m -= 1
-            lam[m] = x
-            j += 1
-        inside = S[E[e, 0]] == 1
-        f = 0.0
-        h = 0.0
-        last = 0.0
-        for m in range(j - i):
-            if inside:
-                f += lam[m] - last
-                h += lam[m] * lam[m] - last * last
-            last = lam[m]
-            inside = not inside
-        if inside:
-            f += 1.0 - last
-            h += 1.0 - last * last
-        _edge_share(V, N, E, ET, e, f, h, G, row0)
-        i = j
-
-
-@inner(nogil=True, error_model="numpy")
-def object_moments(object_mesh, V, N, S, cnt, rec_e, rec_l, nrec, multi, segs, ncross, G, row0):
-    """Moments ``(∫ n dA, ∫ x × n dA)`` of each object face's part inside the hand, added to
-    rows ``row0 + face`` of ``G``, after a pose's volume pass (local coordinates).
+def object_moments(object_mesh, mom, R, t, S, cnt, rec_e, rec_l, nrec, multi, segs, ncross, G):
+    """Moments ``(∫ n dA, ∫ x × n dA)`` of each object face's part inside the hand, in the
+    object's frame, added to its row (``mom.object_edge_links``, from ``mom.object_from``) of
+    ``G`` after a pose's volume pass: the traced segments, the whole edges from every inside
+    vertex to higher-numbered ones, then the crossed edges' corrections
+    (`moment_sums.crossed_edge_moments`, as the hand's).
 
     Parameters
     ----------
     object_mesh : tables.MeshTables
-        The object's edges and their faces (its vertices unmoved: not read).
-    V : numpy.ndarray, shape (object n, 3)
-        The moved object's vertices (`tables.PoseScratch.object_V`); length units.
-    N : numpy.ndarray, shape (object m, 3)
-        The moved faces' unnormalised normals (`tables.PoseScratch.object_N`).
+        The object's mesh (local coordinates, unmoved).
+    mom : tables.MomentTables
+        With the object's tables (`object_edge_links`, ...).
+    R, t : numpy.ndarray, shapes (3, 3) and (3,)
+        The pose, local coordinates (``x -> R x + t`` moves the object).
     S : numpy.ndarray, shape (object n,) int8
         The object's vertex statuses (1 inside the hand).
     cnt : numpy.ndarray, shape (object e,) int64
-        Crossings recorded per object edge (`tables.Workspace.object_count`).
+        Crossings recorded per object edge (`tables.Workspace.object_count`); written to, and
+        put back.
     rec_e, rec_l, nrec : numpy.ndarray, numpy.ndarray, int
         The object records' edges and parameters along ``u → v``, and their number.
     multi : numpy.ndarray, shape (>= nrec,) int64
@@ -136,32 +85,32 @@ def object_moments(object_mesh, V, N, S, cnt, rec_e, rec_l, nrec, multi, segs, n
     segs : numpy.ndarray, shape (>= ncross, `tables.SEGMENT_COLUMNS`)
         The pose's traced segments (`tables.Workspace.segments`).
     ncross : int
-    G : numpy.ndarray, shape (>= row0 + object m, 6)
-    row0 : int
+    G : tables.MomentRows
+        The moments' rows, each row touched listed there.
     """
-    E, ET = object_mesh.edges, object_mesh.edge_faces
+    V, E = object_mesh.vertices, object_mesh.edges
+    adj_start, adj_vert = object_mesh.adj_start, object_mesh.adj_vertex
+    adj_edge = object_mesh.adj_edge
+    elink, emom, unit = mom.object_edge_links, mom.object_edge_moments, mom.object_normals
+    row0 = mom.object_from[0]
+    values, stamp, touched, state = G.values, G.stamp, G.touched, G.state
+    listed, pose = state[0], state[1]
     for k in range(ncross):
         s = int(segs[k, SEGMENT_OBJECT_FACE])
-        nx, ny, nz = _unit(N, s)
-        p, q = SEGMENT_P, SEGMENT_Q
-        _piece(
-            G, row0 + s, nx, ny, nz, segs[k, q], segs[k, q + 1], segs[k, q + 2],
-            segs[k, p], segs[k, p + 1], segs[k, p + 2],
-        )  # fmt: skip
-    for e in range(E.shape[0]):
-        if cnt[e] == 0 and S[E[e, 0]] == 1:
-            _edge_share(V, N, E, ET, e, 1.0, 1.0, G, row0)
-    nm = 0
-    for i in range(nrec):
-        e = rec_e[i]
-        if cnt[e] != 1:
-            multi[nm] = i
-            nm += 1
+        listed = touch(stamp, touched, listed, pose, row0 + s)
+        _segment_piece(values, row0 + s, unit, s, R, t, segs, k)
+    for u in range(V.shape[0]):
+        if S[u] != 1:
             continue
-        lam = rec_l[i]
-        if S[E[e, 0]] == 1:
-            _edge_share(V, N, E, ET, e, lam, lam * lam, G, row0)
-        else:
-            _edge_share(V, N, E, ET, e, 1.0 - lam, 1.0 - lam * lam, G, row0)
-    if nm > 0:
-        _multi_crossed(V, N, E, ET, S, rec_e, rec_l, multi, nm, G, row0)
+        for j in range(adj_start[u], adj_start[u + 1]):
+            if u >= adj_vert[j]:
+                continue
+            e = adj_edge[j]
+            r1, r2 = elink[e, 0], elink[e, 1]
+            listed = touch(stamp, touched, listed, pose, r1)
+            listed = touch(stamp, touched, listed, pose, r2)
+            for d in range(MOMENT_COLUMNS):
+                values[r1, d] += emom[e, EDGE_MOMENTS_T1 + d]
+                values[r2, d] += emom[e, EDGE_MOMENTS_T2 + d]
+    state[0] = listed
+    crossed_edge_moments(V, E, elink, emom, S, cnt, rec_e, rec_l, nrec, multi, G)

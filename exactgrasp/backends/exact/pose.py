@@ -27,6 +27,7 @@ from exactgrasp.backends.exact.sums import face_terms, volume_sum
 from exactgrasp.backends.exact.tables import (
     COTREE_BLOCK,
     GROW,
+    MOMENT_COLUMNS,
     OK,
     PART_FIRST_VERTEX,
     POINT_COLUMNS,
@@ -37,6 +38,7 @@ from exactgrasp.backends.exact.tables import (
     STAT_CROSSING,
     STAT_PAIRS,
     Crossings,
+    MomentRows,
     PoseScratch,
     Workspace,
 )
@@ -46,6 +48,9 @@ from exactgrasp.compiling import inner, kernel
 #: First size of the pair table (a power of two) and of the seed buffer; both double when a
 #: pose needs more (the pose is then computed again).
 PAIR_TABLE, SEED_ROWS = 2**14, 2**13
+#: Rows of moments a call's output holds at first, per pose (it grows when full,
+#: `emit_rows`).
+ROWS_PER_POSE = 64
 
 
 @inner(nogil=True, error_model="numpy")
@@ -189,11 +194,52 @@ def _vertex_bound(V):
 
 
 @inner(nogil=True, error_model="numpy")
-def pose_moments(hand_mesh, hand, object_mesh, mom, scratch, ncross, G):
-    """Stage "moments" of a pose, after its volume: the moments of each link's boundary inside
-    the object (`moment_sums.hand_moments`) and, where ``mom.object_from[0]`` is not -1, of
-    each object face's part inside the hand from that row on (`object_moments.object_moments`),
-    added to ``G`` (L, 6)."""
+def _moment_rows(n_rows, k):
+    """`tables.MomentRows` of ``n_rows`` rows, all zero and untouched, and the first arrays
+    `emit_rows` fills for ``k`` poses (rows, moments)."""
+    first = k * min(n_rows, ROWS_PER_POSE)
+    G = MomentRows(
+        np.zeros((n_rows, MOMENT_COLUMNS)),
+        np.full(n_rows, -1, np.int64),
+        np.zeros(n_rows + 1, np.int64),
+        np.zeros(2, np.int64),
+    )
+    return G, np.empty(first, np.int64), np.empty((first, MOMENT_COLUMNS))
+
+
+@inner(nogil=True, error_model="numpy")
+def emit_rows(G, rows_out, values_out, n, done, poses):
+    """The rows a pose touched (`tables.MomentRows` ``G``), in the order first touched, copied
+    to ``rows_out`` (row numbers) and ``values_out`` (moments) from entry ``n`` on and cleared
+    in ``G``. Returns both arrays and the entries now in them: new ones where they were full,
+    long enough for all ``poses`` at the rate of the ``done`` so far (this one included), and
+    at least twice as long."""
+    values, touched, state = G.values, G.touched, G.state
+    count = state[0]
+    if n + count > rows_out.shape[0]:
+        size = max(2 * rows_out.shape[0], (n + count) * poses // done + count)
+        grown_rows, grown_values = np.empty(size, np.int64), np.empty((size, MOMENT_COLUMNS))
+        grown_rows[:n] = rows_out[:n]
+        grown_values[:n] = values_out[:n]
+        rows_out, values_out = grown_rows, grown_values
+    for i in range(count):
+        r = touched[i]
+        rows_out[n] = r
+        for d in range(MOMENT_COLUMNS):
+            values_out[n, d] = values[r, d]
+            values[r, d] = 0.0
+        n += 1
+    state[0] = 0
+    return rows_out, values_out, n
+
+
+@inner(nogil=True, error_model="numpy")
+def pose_moments(R, t, hand_mesh, hand, object_mesh, mom, scratch, ncross, G):
+    """Stage "moments" of pose ``x -> R x + t``, after its volume: the moments of each link's
+    boundary inside the object (`moment_sums.hand_moments`) and, where ``mom.object_from[0]``
+    is not -1, of each object face's part inside the hand from that row on, in the object's
+    frame (`object_moments.object_moments`), added to ``G``'s rows (`tables.MomentRows`, each
+    row touched listed there)."""
     W = scratch.work
     hand_moments(
         hand_mesh, hand, mom, scratch.hand_status, scratch.uniform, W.hand_count, W.hand_rec.edge,
@@ -201,16 +247,15 @@ def pose_moments(hand_mesh, hand, object_mesh, mom, scratch, ncross, G):
     )  # fmt: skip
     if mom.object_from[0] >= 0:
         object_moments(
-            object_mesh, scratch.object_V, scratch.object_N, scratch.object_status,
-            W.object_count, W.object_rec.edge, W.object_rec.lam, W.nrec[1], scratch.multi,
-            W.segments, ncross, G, mom.object_from[0],
+            object_mesh, mom, R, t, scratch.object_status, W.object_count, W.object_rec.edge,
+            W.object_rec.lam, W.nrec[1], scratch.multi, W.segments, ncross, G,
         )  # fmt: skip
 
 
 @kernel(nogil=True, error_model="numpy")
 def pose_volumes(
     poses, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap,
-    out, bounds, codes, stats, mom, moments,
+    out, bounds, codes, stats, mom, moment_start,
 ):  # fmt: skip
     """Volume of hand ∩ (pose · object) for each pose; the hand is fixed, the object is in its
     own frame.
@@ -239,12 +284,23 @@ def pose_volumes(
         Face pairs evaluated, crossing pairs, and the hand's parts classified vertex by vertex
         / whole inside / whole outside (columns ``STAT_*``).
     mom : tables.MomentTables
-        The hand's moment tables, or empty ones (volumes only).
-    moments : numpy.ndarray, shape (k, L, 6), float64
-        Zeros, to which each `OK` pose with a non-zero volume adds the moments of each link's
-        boundary inside the object (`moment_sums.hand_moments`) and, from row
-        ``mom.object_from[0]`` where that is not -1, of each object face's part inside the hand
-        (`object_moments.object_moments`); L = 0: volumes only.
+        The hand's moment tables, or empty ones (volumes only: ``mom.row_count[0]`` is 0).
+    moment_start : numpy.ndarray, shape (k + 1,), int64
+        Filled with where each pose's moment rows start in the returned arrays (pose ``i``'s
+        are entries ``moment_start[i]`` to ``moment_start[i + 1] - 1``).
+
+    Returns
+    -------
+    rows : numpy.ndarray, shape (t,), int64
+        The rows (of ``mom.row_count[0]``) each `OK` pose with a non-zero volume touched, pose
+        by pose, in the order first touched: of each link's boundary inside the object
+        (`moment_sums.hand_moments`), from row ``mom.object_from[0]`` where that is not -1 of
+        each object face's part inside the hand, in the object's frame
+        (`object_moments.object_moments`), and from row ``mom.part_from[0]`` where that is not
+        -1 the markers of the parts classified whole and inside. Empty for volumes only.
+    values : numpy.ndarray, shape (t, 6), float64
+        Their moments (`MOMENT_COLUMNS`), local coordinates (a marker's zeros). A row not
+        listed for a pose holds zeros.
 
     A pose whose pair table or seed buffer fills up (`GROW`) is computed again with both
     doubled: results do not depend on their sizes.
@@ -252,7 +308,9 @@ def pose_volumes(
     AV = hand_mesh.vertices
     BV0, BF = object_mesh.vertices, object_mesh.faces
     pairs, rows = PAIR_TABLE, SEED_ROWS
-    segs = moments.shape[1] > 0
+    segs = mom.row_count[0] > 0
+    G, rows_out, values_out = _moment_rows(mom.row_count[0], poses.shape[0])
+    n_out = moment_start[0] = 0
     work = _workspace(hand_mesh, hand, hand_grid, object_mesh, object_grid, cap, pairs, rows, segs)
     scratch = _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, work)
     W = scratch.work
@@ -315,9 +373,15 @@ def pose_volumes(
             )
             out[ip] = vol
             bounds[ip] = bound
-            if code == OK and vol > 0.0 and moments.shape[1] > 0:
-                pose_moments(hand_mesh, hand, object_mesh, mom, scratch, ncross, moments[ip])
+            if code == OK and vol > 0.0 and segs:
+                G.state[1] = ip
+                pose_moments(R, t, hand_mesh, hand, object_mesh, mom, scratch, ncross, G)
+                rows_out, values_out, n_out = emit_rows(
+                    G, rows_out, values_out, n_out, ip + 1, poses.shape[0]
+                )
+        moment_start[ip + 1] = n_out
         codes[ip] = code
         stats[ip, STAT_PAIRS] = npairs
         stats[ip, STAT_CROSSING] = ncross
         _cell_stats(stats, ip, hand.parts, scratch.uniform, scratch.hand_status)
+    return rows_out[:n_out], values_out[:n_out]

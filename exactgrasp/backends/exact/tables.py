@@ -6,6 +6,9 @@ the fields it needs once, into locals: reading a field inside a loop over faces 
 the arrays' reference counts there. Lengths are in the meshes' units, local coordinates (about
 the centre of the hand's bounds, see `intersector.ExactIntersector`). The tables are built by
 `prepare` and `grids`.
+
+Long because every table of the kernels is declared here, each field with its shape, dtype and
+units: one place to read what the kernels take.
 """
 
 from __future__ import annotations
@@ -252,9 +255,10 @@ EDGE_MOMENTS_T1, EDGE_MOMENTS_T2 = 0, 6
 
 
 class MomentTables(NamedTuple):
-    """What the volume's derivatives read of the fixed hand (`moment_sums.moment_tables`):
-    which link each face comes from, and the moments of whole edges and parts. Empty (no
-    rows) when a call wants volumes only.
+    """What the volume's derivatives read of the fixed hand (`moment_layout.moment_tables`):
+    which link each face comes from, and the moments of whole edges and parts; with moments
+    per face, the object's edges' too (in its own frame). Empty (no rows) when a call wants
+    volumes only.
 
     ``m`` faces, ``e`` edges, ``parts`` as in `HandTables`, ``k`` (part, link) entries; the
     moments are ``(∫ n dA, ∫ x × n dA)`` of a face's piece (`moments`), local coordinates.
@@ -283,6 +287,37 @@ class MomentTables(NamedTuple):
     #: (1,) int64: the row from which the moments hold one row per object face (the object's
     #: boundary inside the hand, face by face, `object_moments`), or -1: none.
     object_from: np.ndarray
+    #: (1,) int64: the rows of a pose's `MomentRows`: the moments' ``L`` (links, or faces of
+    #: both meshes), then with `part_from` one marker per part; 0: none (volumes only).
+    row_count: np.ndarray
+    #: (1,) int64: the row of part 0's marker, or -1: none. With markers a part classified
+    #: whole and inside lists its marker (row ``part_from + part``) instead of adding its
+    #: entries (`part_moments`) to their rows: what they give is summed once, ahead
+    #: (`face_gradients.vertex_tables`).
+    part_from: np.ndarray
+    #: (object e, 2) int64: the rows of each object edge's faces ``t1`` and ``t2`` (empty
+    #: without `object_from`).
+    object_edge_links: np.ndarray
+    #: (object e, 12) float64: each object edge's whole share of ``t1``'s and ``t2``'s moments
+    #: (as `edge_moments`), in the object's frame (local coordinates, unmoved).
+    object_edge_moments: np.ndarray
+    #: (object m, 3) float64: the object faces' unit normals in its frame (0: no area).
+    object_normals: np.ndarray
+
+
+class MomentRows(NamedTuple):
+    """One pose's moments as the kernel adds them up (`pose.pose_moments`), with the rows
+    the pose touched: only those are read out and cleared, not all ``L``."""
+
+    #: (L, `MOMENT_COLUMNS`) float64: the moments; zero outside the rows touched.
+    values: np.ndarray
+    #: (L,) int64: the pose that last touched each row (-1: none).
+    stamp: np.ndarray
+    #: (L + 1,) int64: the rows this pose touched, in the order first touched (one spare
+    #: entry: `moment_sums.touch` writes before it knows).
+    touched: np.ndarray
+    #: (2,) int64: how many rows this pose touched, and the pose (what `stamp` holds).
+    state: np.ndarray
 
 
 class Crossings(NamedTuple):
