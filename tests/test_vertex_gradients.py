@@ -187,6 +187,82 @@ def test_hand_vertex_gradients_chain_to_the_joint_and_twist_derivatives():
     assert r.volumes == pytest.approx(eg.intersection_volume(grasp), rel=1e-12)
 
 
+# -- the kernel's rows against a plain evaluation, threads, the limit ---------------------------
+
+
+def barrett_in(name: str, n: int = 8):
+    """The built-in Barrett hand (medial joints at 1 rad) around a built-in object 8 cm above
+    its frame, and ``n`` seeded poses near there (the last the same as the first)."""
+    hand = eg.hands.barrett()
+    hand = hand.with_joints({j: 1.0 for j in hand.joint_names if "med" in j})
+    place = np.eye(4)
+    place[:3, 3] = (0.0, 0.0, 0.08)
+    grasp = eg.Grasp(hand, eg.objects.get(name), place, name=name)
+    rng = np.random.default_rng(3)
+    poses = np.stack(
+        [posed(rng.uniform(-0.1, 0.1, 3), rng.uniform(-0.01, 0.01, 3)) for _ in range(n)]
+    )
+    poses[-1] = poses[0]
+    return grasp, poses
+
+
+def plain_vertex_gradients(grasp, poses):
+    """The derivatives from the per-face intersector's dense rows (`volume_moments`, the input
+    frame, the object's in its own), face by face in numpy: area ``F · n``, first moment
+    ``n × M + n (n · a) A``, ``∫ φ_j dA = ((z - y) × (P - A y)) · N / |N|²``."""
+    A = grasp.hand.link_arrays()
+    B = [(grasp.object.vertices @ grasp.object_pose[:3, :3].T + grasp.object_pose[:3, 3],
+          grasp.object.faces)]  # fmt: skip
+    intersector = ExactBackend(n_jobs=1).intersector_of(A, B, faces=True)
+    volumes, rows = intersector.volume_moments(poses)
+    out = []
+    split = np.split(rows, [len(intersector.face_sources[0])], axis=1)
+    for meshes, src, part in zip((A, B), intersector.face_sources, split, strict=True):
+        offsets = np.cumsum([0] + [len(V) for V, _ in meshes])
+        grad = np.zeros((len(poses), offsets[-1], 3))
+        for r, (mesh, face) in enumerate(src):
+            V, F = meshes[mesh]
+            a, b, c = V[F[face]]
+            N = np.cross(b - a, c - a)
+            n = N / np.linalg.norm(N)
+            area = part[:, r, :3] @ n
+            first = np.cross(n, part[:, r, 3:]) + n * (n @ a * area)[:, None]
+            for j, (y, z) in enumerate(((b, c), (c, a), (a, b))):
+                w = np.cross(z - y, first - area[:, None] * y) @ N / (N @ N)
+                grad[:, offsets[mesh] + F[face, j]] += w[:, None] * n
+        out.append(grad)
+    return volumes, out[0], out[1] @ grasp.object_pose[:3, :3]
+
+
+@pytest.mark.parametrize("name", ["bottle_with_handle", "box"])
+def test_kernel_rows_summed_onto_vertices_match_a_plain_evaluation(name):
+    # The box holds most of the hand: its parts classified whole go by their markers.
+    grasp, poses = barrett_in(name)
+    r = eg.intersection_volume_gradients(grasp, poses=poses, backend=ExactBackend(n_jobs=1))
+    volumes, ga, gb = plain_vertex_gradients(grasp, poses)
+    assert np.abs(r.volumes - volumes).max() <= 1e-12 * volumes.max() and volumes.min() > 0
+    for got, want in ((r.grad_a, ga), (r.grad_b, gb)):
+        assert np.abs(want).max() > 0
+        assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+    # Threads, and a repeated pose: the same numbers to the bit.
+    two = eg.intersection_volume_gradients(grasp, poses=poses, backend=ExactBackend(n_jobs=2))
+    np.testing.assert_array_equal(two.grad_a, r.grad_a)
+    np.testing.assert_array_equal(two.grad_b, r.grad_b)
+    np.testing.assert_array_equal(r.grad_a[-1], r.grad_a[0])
+
+
+def test_poses_the_kernel_runs_again_give_the_same_derivatives():
+    # A crossing buffer far too small: every pose is run again with a larger one
+    # (`extrapolate`), its rows made dense there (the parts' markers expanded) and listed again.
+    grasp, poses = barrett_in("box", 4)
+    r = eg.intersection_volume_gradients(grasp, poses=poses, backend=ExactBackend(n_jobs=1))
+    small = ExactBackend(n_jobs=1, capacity=16)
+    again = eg.intersection_volume_gradients(grasp, poses=poses, backend=small)
+    np.testing.assert_array_equal(again.volumes, r.volumes)
+    for got, want in ((again.grad_a, r.grad_a), (again.grad_b, r.grad_b)):
+        assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+
+
 # -- central differences ------------------------------------------------------------------------
 
 
