@@ -11,7 +11,8 @@ the median of ``--repeat`` runs after a warm-up (kernel compilation):
   intersector, as a user's call does);
 * ``per pose``: the same poses on intersectors built once, `ExactIntersector.volumes` against
   `face_gradients.mesh_vertex_gradients` (the kernel with per-face moments of both meshes, and
-  their sums onto every vertex).
+  their sums onto every vertex, into arrays made in each call), its `face_gradients.mesh_tables`
+  made once with the intersector.
 
 Prints both ratios (gradients / volumes), wall clock and CPU time of the process (all
 threads), and the share of poses with a non-zero volume.
@@ -57,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
 
     import exactgrasp as eg
     from exactgrasp.backends.exact import ExactBackend
-    from exactgrasp.backends.exact.face_gradients import mesh_vertex_gradients
+    from exactgrasp.backends.exact.face_gradients import mesh_tables, mesh_vertex_gradients
 
     hand = eg.hands.barrett()
     closing = {name: 1.0 for name in hand.joint_names if "med" in name}
@@ -87,10 +88,11 @@ def main(argv: list[str] | None = None) -> int:
     B = [(obj.vertices @ R.T + t, obj.faces)]
     plain = backend.intersector_of(A, B)
     faces = backend.intersector_of(A, B, faces=True)
+    tables = mesh_tables(faces, A, B)
     plain.volumes(poses)
-    mesh_vertex_gradients(faces, A, B, poses)
+    mesh_vertex_gradients(faces, A, B, poses, tables)
     pose_v = timed(lambda: plain.volumes(poses), args.repeat)
-    pose_g = timed(lambda: mesh_vertex_gradients(faces, A, B, poses), args.repeat)
+    pose_g = timed(lambda: mesh_vertex_gradients(faces, A, B, poses, tables), args.repeat)
     row = {
         "date": time.strftime("%Y-%m-%d"),
         "object": args.object,
