@@ -212,12 +212,12 @@ def emit_rows(G, rows_out, values_out, n, done, poses):
     """The rows a pose touched (`tables.MomentRows` ``G``), in the order first touched, copied
     to ``rows_out`` (row numbers) and ``values_out`` (moments) from entry ``n`` on and cleared
     in ``G``. Returns both arrays and the entries now in them: new ones where they were full,
-    long enough for all ``poses`` at the rate of the ``done`` so far (this one included), and
-    at least twice as long."""
+    long enough for all ``poses`` at 5/4 of the rate of the ``done`` so far (this one
+    included), and at least twice as long."""
     values, touched, state = G.values, G.touched, G.state
     count = state[0]
     if n + count > rows_out.shape[0]:
-        size = max(2 * rows_out.shape[0], (n + count) * poses // done + count)
+        size = max(2 * rows_out.shape[0], (n + count) * poses * 5 // (4 * done) + count)
         grown_rows, grown_values = np.empty(size, np.int64), np.empty((size, MOMENT_COLUMNS))
         grown_rows[:n] = rows_out[:n]
         grown_values[:n] = values_out[:n]
