@@ -143,16 +143,14 @@ def _part_sums(mom, weights, directions, targets):
 def vertex_sums(begin, end, rows, values, tables, out_a, out_b):
     """Each pose's moments (`moment_entries.MomentEntries`: ``begin``, ``end``, ``rows``,
     ``values``; local coordinates, the object's in its own frame) summed onto the vertices,
-    written to ``out_a`` (k, n_a, 3) (the hand's rows) and ``out_b`` (k, n_b, 3) (the
-    object's), every entry (a pose's zeros first, while its rows are in cache). A row whose
-    ``F`` is 0 is a face not met: skipped; a part's marker adds that part's sums
-    (`VertexTables.part_vectors`)."""
+    added to ``out_a`` (k, n_a, 3) (the hand's rows) and ``out_b`` (k, n_b, 3) (the
+    object's). A row whose ``F`` is 0 is a face not met: skipped; a part's marker adds that
+    part's sums (`VertexTables.part_vectors`). Only the vertices of faces met are written:
+    fresh zeros (``numpy.zeros``) stay unmapped elsewhere."""
     W, D, T = tables.weights, tables.directions, tables.targets
     first_object, first_part = tables.object_from[0], tables.part_from[0]
     ps, pt, pv = tables.part_start, tables.part_targets, tables.part_vectors
     for i in range(begin.shape[0]):
-        out_a[i] = 0.0
-        out_b[i] = 0.0
         for e in range(begin[i], end[i]):
             r = rows[e]
             if r >= first_part:
@@ -180,8 +178,8 @@ def vertex_gradients(
     out_a: np.ndarray,
     out_b: np.ndarray,
 ) -> np.ndarray:
-    """Volumes (k,) of poses (k, 4, 4), their derivatives by every vertex written to ``out_a``
-    (k, n_a, 3) and ``out_b`` (k, n_b, 3) (squared length units), as ``tables``
+    """Volumes (k,) of poses (k, 4, 4), their derivatives by every vertex added to ``out_a``
+    (k, n_a, 3) and ``out_b`` (k, n_b, 3) (zeros; squared length units), as ``tables``
     (`vertex_tables`) numbers and turns them."""
     volumes, entries = intersector.moment_entries(poses)
     vertex_sums(*entries, tables, out_a, out_b)
@@ -231,7 +229,7 @@ def mesh_vertex_gradients(
         motion); a body's in its own frame (``R^T`` of the derivative by its moved vertex).
     """
     tables = mesh_tables(intersector, hand, bodies) if tables is None else tables
-    out_a = np.empty((len(poses), sum(len(V) for V, _ in hand), 3))
-    out_b = np.empty((len(poses), sum(len(V) for V, _ in bodies), 3))
+    out_a = np.zeros((len(poses), sum(len(V) for V, _ in hand), 3))
+    out_b = np.zeros((len(poses), sum(len(V) for V, _ in bodies), 3))
     volumes = vertex_gradients(intersector, tables, poses, out_a, out_b)
     return volumes, out_a, out_b
