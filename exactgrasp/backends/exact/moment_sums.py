@@ -36,7 +36,7 @@ from exactgrasp.backends.exact.tables import (
 )
 from exactgrasp.compiling import inner
 
-__all__ = ["crossed_edge_moments", "hand_moments", "touch"]
+__all__ = ["add_edge", "add_piece", "crossed_edge_moments", "hand_moments", "touch"]
 
 
 @inner(nogil=True, error_model="numpy")
@@ -71,18 +71,26 @@ def segment_moments(segs, ncross, G):
         qx, qy, qz = segs[k, q], segs[k, q + 1], segs[k, q + 2]
         nx, ny, nz = segs[k, n], segs[k, n + 1], segs[k, n + 2]
         lk = int(segs[k, SEGMENT_LINK])
-        c = nx * (py * qz - pz * qy) + ny * (pz * qx - px * qz) + nz * (px * qy - py * qx)
-        sx, sy, sz = px + qx, py + qy, pz + qz
-        a = c / 2.0
-        b = c / 6.0  # one division a segment, not three
         listed = touch(stamp, touched, listed, pose, lk)
-        rows[lk, 0] += nx * a
-        rows[lk, 1] += ny * a
-        rows[lk, 2] += nz * a
-        rows[lk, 3] += (sy * nz - sz * ny) * b
-        rows[lk, 4] += (sz * nx - sx * nz) * b
-        rows[lk, 5] += (sx * ny - sy * nx) * b
+        add_piece(rows, lk, nx, ny, nz, px, py, pz, qx, qy, qz)
     state[0] = listed
+
+
+@inner(nogil=True, error_model="numpy")
+def add_piece(rows, r, nx, ny, nz, px, py, pz, qx, qy, qz):
+    """Add to ``rows[r]`` the moments of a boundary piece ``p → q`` of a face with unit
+    normal ``n``: ``∫ n dA += n c / 2`` and ``∫ x × n dA += ((p + q) × n) c / 6``, with
+    ``c = n · (p × q)``."""
+    c = nx * (py * qz - pz * qy) + ny * (pz * qx - px * qz) + nz * (px * qy - py * qx)
+    sx, sy, sz = px + qx, py + qy, pz + qz
+    a = c / 2.0
+    b = c / 6.0  # one division a piece, not three
+    rows[r, 0] += nx * a
+    rows[r, 1] += ny * a
+    rows[r, 2] += nz * a
+    rows[r, 3] += (sy * nz - sz * ny) * b
+    rows[r, 4] += (sz * nx - sx * nz) * b
+    rows[r, 5] += (sx * ny - sy * nx) * b
 
 
 @inner(nogil=True, error_model="numpy")
@@ -125,14 +133,21 @@ def whole_edge_moments(hand_mesh, hand, mom, S, uniform, G):
             for k in range(adj_start[u], adj_start[u + 1]):
                 if u >= adj_vert[k]:
                     continue
-                e = adj_edge[k]
-                l1, l2 = elink[e, 0], elink[e, 1]
-                listed = touch(stamp, touched, listed, pose, l1)
-                listed = touch(stamp, touched, listed, pose, l2)
-                for d in range(MOMENT_COLUMNS):
-                    rows[l1, d] += emom[e, EDGE_MOMENTS_T1 + d]
-                    rows[l2, d] += emom[e, EDGE_MOMENTS_T2 + d]
+                listed = add_edge(rows, stamp, touched, listed, pose, elink, emom, adj_edge[k])
     state[0] = listed
+
+
+@inner(nogil=True, error_model="numpy")
+def add_edge(rows, stamp, touched, listed, pose, elink, emom, e):
+    """Add whole edge ``e``'s shares of its two faces' moments (``emom``) to their rows
+    (``elink``), listing the rows (`touch`); returns the rows listed now."""
+    r1, r2 = elink[e, 0], elink[e, 1]
+    listed = touch(stamp, touched, listed, pose, r1)
+    listed = touch(stamp, touched, listed, pose, r2)
+    for d in range(MOMENT_COLUMNS):
+        rows[r1, d] += emom[e, EDGE_MOMENTS_T1 + d]
+        rows[r2, d] += emom[e, EDGE_MOMENTS_T2 + d]
+    return listed
 
 
 @inner(nogil=True, error_model="numpy")

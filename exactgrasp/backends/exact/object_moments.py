@@ -16,11 +16,13 @@ gives the volume's derivative by every object vertex (`face_gradients`).
 
 from __future__ import annotations
 
-from exactgrasp.backends.exact.moment_sums import crossed_edge_moments, touch
+from exactgrasp.backends.exact.moment_sums import (
+    add_edge,
+    add_piece,
+    crossed_edge_moments,
+    touch,
+)
 from exactgrasp.backends.exact.tables import (
-    EDGE_MOMENTS_T1,
-    EDGE_MOMENTS_T2,
-    MOMENT_COLUMNS,
     SEGMENT_OBJECT_FACE,
     SEGMENT_P,
     SEGMENT_Q,
@@ -45,16 +47,7 @@ def _segment_piece(values, r, unit, s, R, t, segs, k):
     qx = R[0, 0] * bx + R[1, 0] * by + R[2, 0] * bz
     qy = R[0, 1] * bx + R[1, 1] * by + R[2, 1] * bz
     qz = R[0, 2] * bx + R[1, 2] * by + R[2, 2] * bz
-    c = nx * (py * qz - pz * qy) + ny * (pz * qx - px * qz) + nz * (px * qy - py * qx)
-    sx, sy, sz = px + qx, py + qy, pz + qz
-    a = c / 2.0
-    b = c / 6.0
-    values[r, 0] += nx * a
-    values[r, 1] += ny * a
-    values[r, 2] += nz * a
-    values[r, 3] += (sy * nz - sz * ny) * b
-    values[r, 4] += (sz * nx - sx * nz) * b
-    values[r, 5] += (sx * ny - sy * nx) * b
+    add_piece(values, r, nx, ny, nz, px, py, pz, qx, qy, qz)
 
 
 @inner(nogil=True, error_model="numpy")
@@ -105,12 +98,6 @@ def object_moments(object_mesh, mom, R, t, S, cnt, rec_e, rec_l, nrec, multi, se
         for j in range(adj_start[u], adj_start[u + 1]):
             if u >= adj_vert[j]:
                 continue
-            e = adj_edge[j]
-            r1, r2 = elink[e, 0], elink[e, 1]
-            listed = touch(stamp, touched, listed, pose, r1)
-            listed = touch(stamp, touched, listed, pose, r2)
-            for d in range(MOMENT_COLUMNS):
-                values[r1, d] += emom[e, EDGE_MOMENTS_T1 + d]
-                values[r2, d] += emom[e, EDGE_MOMENTS_T2 + d]
+            listed = add_edge(values, stamp, touched, listed, pose, elink, emom, adj_edge[j])
     state[0] = listed
     crossed_edge_moments(V, E, elink, emom, S, cnt, rec_e, rec_l, nrec, multi, G)
