@@ -201,9 +201,11 @@ def test_a_worker_uses_one_core_manifold3d_included(tmp_path):
         cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
     used = got["threads"]
     assert used <= 1.02, f"a worker limited to 1 thread used {used:.3f} threads' worth of CPU"
-    # The plain ratio, dask's own bookkeeping included, as timings.jsonl records it.
+    # The plain ratio, dask's own bookkeeping included, as timings.jsonl records it. The
+    # worker reads its clocks inside the call, this test around it: the test's window holds
+    # a few more milliseconds of the process's CPU, so its ratio may be the larger by that.
     outcome = got["outcome"]
-    assert outcome["cpu_seconds"] / outcome["thread_cpu_seconds"] >= used
+    assert outcome["cpu_seconds"] / outcome["thread_cpu_seconds"] >= used - 0.005
     if len(os.sched_getaffinity(0)) < 2:
         pytest.skip("one CPU: the unlimited comparison needs two")
     # The same rows in a fresh process without the limit: the measurement sees TBB's threads.
