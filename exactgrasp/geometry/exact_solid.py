@@ -34,7 +34,7 @@ from scipy.sparse.csgraph import connected_components
 
 from exactgrasp.errors import MeshError
 from exactgrasp.geometry.exact_cut import Arrangement, cut_exactly
-from exactgrasp.geometry.rational import centroid, orient2d, plane_of, side
+from exactgrasp.geometry.rational import centroid, orient2d, plane_of, side, triple
 from exactgrasp.geometry.topology import edge_defects, format_point
 from exactgrasp.geometry.wedges import split_nonmanifold
 
@@ -312,7 +312,7 @@ def _exact_order(cut: Arrangement, used: np.ndarray):
 
         def half(v) -> tuple[int, int]:
             # 0: along the first corner, 1: the half-turn after it, 2: opposite, 3: the rest
-            s = _sign(_triple(u[0], v, d))
+            s = _sign(triple(u[0], v, d))
             if s:
                 return (1, 0) if s > 0 else (3, 0)
             return (0, 0) if _dot(v, u[0]) * dd - _dot(v, d) * _dot(u[0], d) > 0 else (2, 0)
@@ -321,7 +321,7 @@ def _exact_order(cut: Arrangement, used: np.ndarray):
             hi, hj = half(u[i]), half(u[j])
             if hi != hj:
                 return -1 if hi < hj else 1
-            return -_sign(_triple(u[i], u[j], d))
+            return -_sign(triple(u[i], u[j], d))
 
         return np.array(sorted(range(len(u)), key=cmp_to_key(compare)), np.int64)
 
@@ -330,15 +330,6 @@ def _exact_order(cut: Arrangement, used: np.ndarray):
 
 def _dot(p, q):
     return p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
-
-
-def _triple(p, q, r):
-    """(p x q) . r"""
-    return (
-        (p[1] * q[2] - p[2] * q[1]) * r[0]
-        + (p[2] * q[0] - p[0] * q[2]) * r[1]
-        + (p[0] * q[1] - p[1] * q[0]) * r[2]
-    )
 
 
 def _sign(x) -> int:

@@ -18,6 +18,7 @@ from math import gcd
 import numpy as np
 
 from exactgrasp.geometry.exact_solid import winding_regions
+from exactgrasp.geometry.rational import triple
 
 __all__ = ["LevelSet", "level_set"]
 
@@ -39,16 +40,6 @@ class LevelSet:
     volume: Fraction
     triangles: np.ndarray
     sources: np.ndarray
-
-
-def _tetrahedron(A: tuple, B: tuple, C: tuple) -> tuple[int, int]:
-    """6 × the signed volume of (0, A, B, C) for homogeneous integer points, as (num, den)."""
-    det = (
-        A[0] * (B[1] * C[2] - B[2] * C[1])
-        - A[1] * (B[0] * C[2] - B[2] * C[0])
-        + A[2] * (B[0] * C[1] - B[1] * C[0])
-    )
-    return det, A[3] * B[3] * C[3]
 
 
 def level_set(vertices: np.ndarray, faces: np.ndarray, level: int) -> LevelSet:
@@ -73,7 +64,9 @@ def level_set(vertices: np.ndarray, faces: np.ndarray, level: int) -> LevelSet:
     total, den = 0, 1
     for f in kept.tolist():
         a, b, c = G[f]
-        det, w = _tetrahedron(P[a], P[b], P[c])
+        A, B, C = P[a], P[b], P[c]
+        # 6 × the tetrahedron (0, A, B, C) of homogeneous integer points: det / (W_A W_B W_C).
+        det, w = triple(B, C, A), A[3] * B[3] * C[3]
         det = det if face_sign[f] > 0 else -det
         total, den = total * w + det * den, den * w
         g = gcd(total, den)

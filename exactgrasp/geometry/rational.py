@@ -32,6 +32,7 @@ __all__ = [
     "plane_of",
     "point_on",
     "side",
+    "triple",
 ]
 
 
@@ -206,6 +207,15 @@ def incircle(a: tuple, b: tuple, c: tuple, d: tuple, i: int, j: int) -> int:
         x, y, w = p[i], p[j], p[3]
         rows.append((x * w, y * w, x * x + y * y, w * w))
     return _det4(rows)
+
+
+def triple(p, q, r):
+    """``(p × q) · r`` of the first three coordinates (exact for integers and fractions)."""
+    return (
+        (p[1] * q[2] - p[2] * q[1]) * r[0]
+        + (p[2] * q[0] - p[0] * q[2]) * r[1]
+        + (p[0] * q[1] - p[1] * q[0]) * r[2]
+    )
 
 
 def _det4(m) -> int:

@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.backends.exact.tables import MomentTables
+from exactgrasp.backends.exact.tolerances import U
 from exactgrasp.geometry.level_sets import LevelSet, level_set
 
 __all__ = [
@@ -34,9 +35,6 @@ __all__ = [
     "scene_rounding",
     "shift_rounding",
 ]
-
-#: Unit roundoff of float64.
-U = 2.0**-53
 
 
 def moved_like_the_kernel(vertices: np.ndarray, pose: np.ndarray) -> np.ndarray:
