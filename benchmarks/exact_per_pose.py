@@ -1,5 +1,11 @@
-"""CPU milliseconds per pose of the exact backend on one thread: the real spray-bottle grasp,
-every distinct pose of the balanced preset, no broad phase (every pose through the kernel).
+"""CPU milliseconds per pose of the exact backend on one thread: a grasp, every distinct pose
+of the balanced preset, no broad phase (every pose through the kernel).
+
+``--scene`` picks the grasp: ``spray`` (default; the authors' Barrett hand and spray bottle,
+``barrett-grasps/noise/spray_bottle_base.json``), ``cereal`` (a contact-adjusted cereal-box
+study grasp, ``barrett-grasps/grasps/obj5_sub4_grasp1_optimal0_target.json``) or ``messy``
+(the messy-hand benchmark's hand, `messy_hand.write_hand`: 17 links, 283k triangles, edges of
+four faces and a self-crossing palm, with the built-in bottle pushed into its palm).
 
 For an A/B of two commits, check the other one out beside this tree and run the two in turn,
 each in a fresh process, several rounds (the machine drifts between runs, so compare within a
@@ -25,16 +31,41 @@ import numpy as np
 from shared_data import add_data_options, data_or_skip
 
 GRASP = "barrett-grasps/noise/spray_bottle_base.json"
+SCENES = {
+    "spray": GRASP,
+    "cereal": "barrett-grasps/grasps/obj5_sub4_grasp1_optimal0_target.json",
+    "messy": None,
+}
+
+
+def messy_grasp(folder):
+    """The messy-hand benchmark's hand (`messy_hand.write_hand`) with the built-in bottle
+    pushed 2 cm into its palm (a sphere of 5 cm at the origin)."""
+    from messy_hand import write_hand
+
+    import exactgrasp as eg
+
+    path, _ = write_hand(folder)
+    hand = eg.Hand.from_mjcf(path, frame=eg.HandFrame.identity())
+    place = np.eye(4)
+    place[:3, 3] = (0.0, 0.0, 0.07)
+    return eg.Grasp(hand, eg.objects.get("bottle_with_handle"), place, name="messy")
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--label", default="this tree")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--scene", choices=sorted(SCENES), default="spray")
+    ap.add_argument(
+        "--threads", action="store_true",
+        help="also time the poses on two threads (n_jobs=2) against one, wall clock, alternating",
+    )  # fmt: skip
     add_data_options(ap)
     args = ap.parse_args(argv)
-    data = data_or_skip(args, GRASP)
-    if data is None:
+    needed = SCENES[args.scene]
+    data = data_or_skip(args, needed) if needed else None
+    if needed and data is None:
         return 0
     warnings.simplefilter("ignore")
     import exactgrasp as eg
@@ -42,7 +73,14 @@ def main(argv: list[str] | None = None) -> int:
     from exactgrasp.backends.exact import ExactBackend
     from exactgrasp.paths.presets import as_sampler
 
-    grasp = eg.Grasp.from_file(data / GRASP)
+    if needed:
+        grasp = eg.Grasp.from_file(data / needed)
+    else:
+        import tempfile
+        from pathlib import Path
+
+        with tempfile.TemporaryDirectory() as tmp:
+            grasp = messy_grasp(Path(tmp))
     poses = as_sampler(None).poses().reshape(-1, 4, 4)
     poses = poses[np.sort(np.unique(repeated_poses(poses), return_index=True)[1])]
     backend = ExactBackend(broadphase=None, n_jobs=1)
@@ -56,6 +94,18 @@ def main(argv: list[str] | None = None) -> int:
         args.label, len(poses), " ".join(f"{t:.3f}" for t in times), "ms a pose;",
         f"volumes' sum {float(volumes.sum())!r}",
     )  # fmt: skip
+    if args.threads:
+        two = ExactBackend(broadphase=None, n_jobs=2)
+        two.volumes(grasp, poses[:50])
+        walls = {1: [], 2: []}
+        for _ in range(args.repeat):
+            for jobs, b in ((1, backend), (2, two)):
+                start = time.perf_counter()
+                got = b.volumes(grasp, poses)
+                walls[jobs].append(time.perf_counter() - start)
+                assert np.array_equal(got, volumes)
+        one, both = (float(np.median(walls[j])) for j in (1, 2))
+        print(args.label, f"wall one thread {one:.3f} s, two {both:.3f} s: x{one / both:.2f}")
     return 0
 
 

@@ -2,7 +2,8 @@
 
 ``numba_exact.npz`` in this folder holds, per scene, the poses and everything the numba kernel
 of commit 09a1e26 (the last with it) returned for them: volumes, bounds, codes, statistics and
-the moment entries (``start``, and a SHA-256 of ``rows`` and ``values``), recorded with that commit's package::
+the moment entries (``start``, and a SHA-256 of ``rows`` and ``values``), recorded with that
+commit's package::
 
     python tests/kernel_goldens/record_exact.py   # writes numba_exact.npz beside it
 
@@ -34,6 +35,8 @@ OUT = HERE / "numba_exact.npz"
 OUTPUTS = ("volumes", "bounds", "codes", "stats", "start", "rows", "values")
 #: Outputs stored as a SHA-256 of their bytes (dtype and shape included), the rest in full.
 HASHED = ("rows", "values")
+#: Where the built-in objects sit in the hand's frame (m).
+LIFT = np.array([0.0, 0.0, 0.08])
 #: Poses per built-in scene and per touching scene with a ball.
 POSES = 96
 
@@ -60,7 +63,7 @@ def _barrett_scenes(rng):
     links = hand.link_arrays()
     for name in ("bottle_with_handle", "box", "cylinder"):
         obj = eg.objects.get(name)
-        body = [(obj.vertices + (0.0, 0.0, 0.08), obj.faces)]
+        body = [(obj.vertices + LIFT, obj.faces)]
         poses = _poses(rng, POSES)
         yield f"barrett/{name}/volumes", links, body, poses, False, False, None
         yield f"barrett/{name}/links", links, body, poses, False, True, None
@@ -68,11 +71,11 @@ def _barrett_scenes(rng):
     obj = eg.objects.get("box")
     for tag, s, shift in (("1e-3", 1e-3, 0.0), ("1e3", 1e3, 0.0), ("far", 1.0, 700.0)):
         moved = [(V * s + shift, F) for V, F in links]
-        body = [((obj.vertices + (0.0, 0.0, 0.08)) * s + shift, obj.faces)]
+        body = [((obj.vertices + LIFT) * s + shift, obj.faces)]
         poses = _poses(rng, POSES // 2, scale=s)
         yield f"barrett/box/{tag}", moved, body, poses, True, True, None
     obj = eg.objects.get("bottle_with_handle")
-    body = [(obj.vertices + (0.0, 0.0, 0.08), obj.faces)]
+    body = [(obj.vertices + LIFT, obj.faces)]
     yield "barrett/bottle/capacity16", links, body, _poses(rng, 32), False, True, 16
 
 
@@ -109,8 +112,7 @@ def run_kernel(label, links, bodies, poses, faces, moments, capacity):
     """The kernel's raw outputs on one scene, as a dict of arrays (`OUTPUTS`), or None where
     the intake refuses the scene (recorded as refused)."""
     from exactgrasp.backends.exact import ExactBackend
-    from exactgrasp.backends.exact.intersector import EMPTY_MOMENTS
-    from exactgrasp.backends.exact.pose import pose_volumes
+    from exactgrasp.backends.exact.intersector import EMPTY_MOMENTS, pose_volumes
     from exactgrasp.backends.exact.tables import N_STATS
     from exactgrasp.errors import ExactGraspError
     from exactgrasp.overlap import _operands
@@ -120,7 +122,8 @@ def run_kernel(label, links, bodies, poses, faces, moments, capacity):
             warnings.simplefilter("ignore")
             if label.startswith("touching/"):
                 # Read as solids, as `intersection` reads them (edges of four faces split).
-                links, bodies = _operands(links, bodies, ("m", "m"), repair=True, check_scale=False)
+                units = ("m", "m")
+                links, bodies = _operands(links, bodies, units, repair=True, check_scale=False)
             x = ExactBackend().intersector_of(links, bodies, faces=faces)
     except ExactGraspError:
         return None
@@ -137,9 +140,7 @@ def run_kernel(label, links, bodies, poses, faces, moments, capacity):
         x.object_grid, x.tiny, x.capacity if capacity is None else capacity, o, b, c, st,
         x.moment_tables if moments else EMPTY_MOMENTS, start,
     )  # fmt: skip
-    return dict(
-        volumes=o, bounds=b, codes=c, stats=st, start=start, rows=rows, values=values
-    )
+    return dict(volumes=o, bounds=b, codes=c, stats=st, start=start, rows=rows, values=values)
 
 
 def main() -> int:

@@ -155,4 +155,6 @@ cdef class PoseScratch:
         self.near_cotree = _bytes(tables.near_cotree)
         self.near_block = _bytes(tables.near_block)
         self.none = _bytes(tables.none)
-        self.work = Workspace(tables.work)
+        # The driver builds the search's scratch compiled already (it may replace it).
+        work = tables.work
+        self.work = work if isinstance(work, Workspace) else Workspace(work)
