@@ -1,4 +1,5 @@
-"""The keyed caches of exactgrasp: `LRUCache` in memory, `DiskCache` of arrays on disk."""
+"""The keyed caches of exactgrasp: `LRUCache` in memory, `DiskCache` of arrays on disk, and
+`code_digest`, the sources of the code that fills a disk cache, part of its keys."""
 
 from __future__ import annotations
 
@@ -13,6 +14,48 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+#: The rooms (folders of the package) whose sources compute what the disk caches keep: the
+#: geometry (welding, shells, crossings, winding numbers, repairs).
+CODE_ROOMS = ("geometry",)
+#: The sources digested: Python modules, and the compiled kernels' Cython sources and inline
+#: parts (installed beside their extensions).
+CODE_SOURCES = ("*.py", "*.pyx", "*.pxd")
+
+
+@functools.cache
+def rooms_digest() -> str:
+    """SHA-256 (hex) of every source (`CODE_SOURCES`) of `CODE_ROOMS`, with its path, in path
+    order."""
+    root = Path(__file__).resolve().parent
+    files = []
+    for folder in CODE_ROOMS:
+        files += sorted(p for pattern in CODE_SOURCES for p in (root / folder).rglob(pattern))
+    digest = hashlib.sha256()
+    for path in files:
+        digest.update(path.relative_to(root).as_posix().encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def code_digest(*modules: str | os.PathLike) -> str:
+    """`rooms_digest` and the SHA-256 of each of ``modules`` (the source files that compute a
+    disk cache's entries): part of that cache's keys (`DiskCache`'s ``version``), so that an
+    edit to any of them starts it afresh, where the package's version has not changed (a
+    checkout).
+
+    Parameters
+    ----------
+    *modules : path-like
+        Source files, usually the caller's ``__file__``.
+
+    Returns
+    -------
+    str
+        ``"<rooms' sources>/<module>/..."``, SHA-256 hex digests.
+    """
+    own = [hashlib.sha256(Path(module).read_bytes()).hexdigest() for module in modules]
+    return "/".join([rooms_digest(), *own])
 
 
 def mesh_key(vertices: np.ndarray, faces: np.ndarray) -> str:

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numba
 import numpy as np
 
@@ -58,51 +56,3 @@ def test_cache_entries_are_keyed_on_every_kernel_modules_source(monkeypatch):
     monkeypatch.setattr(compiling, "kernel_sources_digest", lambda: "edited")
     assert cache._index_key(sig, codegen)[:-1] == key[:-1]
     assert cache._index_key(sig, codegen)[-1] == "edited"
-
-
-def test_kernel_sources_digest_covers_callee_and_constant_modules(tmp_path, monkeypatch):
-    from exactgrasp import compiling
-
-    root = Path(compiling.__file__).parent
-    assert (root / "backends/exact/tolerances.py").is_file()
-    assert (root / "geometry/predicates.py").is_file()
-    original = digest = compiling.kernel_sources_digest()
-    assert len(digest) == 64 and digest == compiling.kernel_sources_digest()
-    # A copy of the package digests the same; with a constant or a kernel source changed, not.
-    import shutil
-
-    copy = tmp_path / "exactgrasp"
-    shutil.copytree(root, copy, ignore=shutil.ignore_patterns("__pycache__"))
-    monkeypatch.setattr(compiling, "__file__", str(copy / "compiling.py"))
-    compiling.kernel_sources_digest.cache_clear()
-    try:
-        assert compiling.kernel_sources_digest() == digest
-        # A constant of a Python module, then a compiled kernel's Cython source.
-        for edited in ("backends/exact/tolerances.py", "geometry/_winding.pyx"):
-            (copy / edited).write_text((copy / edited).read_text() + "\n# edited\n")
-            compiling.kernel_sources_digest.cache_clear()
-            assert compiling.kernel_sources_digest() != digest
-            digest = compiling.kernel_sources_digest()
-    finally:
-        monkeypatch.undo()
-        compiling.kernel_sources_digest.cache_clear()
-    assert compiling.kernel_sources_digest() == original
-
-
-def test_disk_caches_are_keyed_on_the_version_and_the_code_that_fills_them(tmp_path):
-    from exactgrasp import compiling
-    from exactgrasp.grasp import files
-    from exactgrasp.hands import geoms
-    from exactgrasp.version import __version__
-
-    module = tmp_path / "reader.py"
-    module.write_text("x = 1\n")
-    before = compiling.code_digest(module)
-    assert before.split("/")[0] == compiling.kernel_sources_digest()
-    module.write_text("x = 2\n")
-    assert compiling.code_digest(module) != before
-    # The objects' and the link meshes' caches: each the version, the kernels' sources (the
-    # geometry room among them) and its own module.
-    for cache, source in ((files.OBJECT_SOLIDS, files.__file__), (geoms.WELDED, geoms.__file__)):
-        assert cache.version == f"{__version__}/{compiling.code_digest(source)}"
-    assert files.OBJECT_SOLIDS.kind != geoms.WELDED.kind

@@ -19,8 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from exactgrasp.cache import DiskCache, LRUCache
-from exactgrasp.compiling import code_digest
+from exactgrasp.cache import DiskCache, LRUCache, code_digest
 from exactgrasp.errors import (
     ExactGraspError,
     Fix,
@@ -148,8 +147,8 @@ OBJECTS = LRUCache(32)
 
 #: The same objects on disk (`exactgrasp.cache.DiskCache`, ``EXACTGRASP_CACHE``): the solid's
 #: arrays, its reports and the warnings its reading gave, keyed on the same file content and
-#: options and on the code that reads them (the geometry room, among the kernels' sources, and
-#: this module). Every batch worker on a machine, and every later
+#: options and on the code that reads them (the geometry room's sources and this module:
+#: `exactgrasp.cache.code_digest`). Every batch worker on a machine, and every later
 #: run, reads a messy mesh's solid instead of resolving it again (0.4 s for the authors'
 #: pitcher).
 OBJECT_SOLIDS = DiskCache("objects", version=lambda: f"{__version__}/{code_digest(__file__)}")

@@ -11,8 +11,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from exactgrasp.cache import DiskCache
-from exactgrasp.compiling import code_digest
+from exactgrasp.cache import DiskCache, code_digest
 from exactgrasp.errors import Fix, MeshError, ModelError, recording_warnings, warn_once
 from exactgrasp.geometry import primitives
 from exactgrasp.geometry.shells import resolve_shells
@@ -60,7 +59,7 @@ JOINT_FREE, JOINT_BALL, JOINT_SLIDE, JOINT_HINGE = range(4)
 
 #: Welded, resolved link meshes on disk, keyed on the arrays MuJoCo read from the mesh file and
 #: on the package version and the sources of the code that welds and resolves them (the
-#: geometry room, among the kernels' sources, and this module).
+#: geometry room's sources, `exactgrasp.cache.code_digest`, and this module).
 WELDED = DiskCache("solids", version=lambda: f"{__version__}/{code_digest(__file__)}")
 
 
