@@ -20,7 +20,6 @@ from exactgrasp.errors import ExactGraspError
 from exactgrasp.grasp import Grasp
 from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
-from exactgrasp.progress import compile_seconds
 
 #: Reference values below this fraction of the hand volume count as zero when forming
 #: relative errors (a ratio to a near-zero volume says nothing about the estimator).
@@ -58,14 +57,11 @@ class Comparison:
         poses), ``false_positive_poses`` (reference 0, estimate > 0), ``false_negative_poses``,
         ``n_poses``, ``n_compared``.
     seconds : dict of str to float
-        Wall seconds each backend took to compute, compiling left out.
+        Wall seconds each backend took to compute.
     reference : str
         The backend the others are compared with (the last one given).
     backends : list of str
         The backends' labels, in the order given.
-    compile_seconds : dict of str to float
-        Wall seconds spent compiling kernels while each backend ran (first use in a process
-        only; 0 when they loaded from numba's cache).
     """
 
     table: dict[str, np.ndarray]
@@ -73,18 +69,10 @@ class Comparison:
     seconds: dict[str, float]
     reference: str
     backends: list[str] = field(default_factory=list)
-    compile_seconds: dict[str, float] = field(default_factory=dict)
 
     def summary_text(self) -> str:
         """A plain-text table of the summary."""
         lines = [f"reference backend: {self.reference} ({self.seconds[self.reference]:.2f} s)"]
-        compiled = {k: v for k, v in self.compile_seconds.items() if v >= 0.05}
-        if compiled:
-            spent = ", ".join(f"{k} {v:.1f} s" for k, v in compiled.items())
-            lines.append(
-                f"compiling the kernels (first use only) took {spent} more, not counted in the "
-                "seconds below"
-            )
         header = (
             f"{'backend':>10} {'seconds':>8} {'median|rel|':>12} {'p95|rel|':>10} "
             f"{'max|rel|':>10} {'mean signed':>12} {'corr':>8} {'FP':>5} {'FN':>5}"
@@ -165,12 +153,10 @@ def compare_backends(
     poses = sampler.poses()
     volumes: dict[str, np.ndarray] = {}
     seconds: dict[str, float] = {}
-    compiled: dict[str, float] = {}
     for label, backend in zip(labels, instances, strict=True):
-        start, before = time.perf_counter(), compile_seconds()
+        start = time.perf_counter()
         volumes[label] = compute_volumes(grasp, poses, backend, progress, f"{label} poses")
-        compiled[label] = compile_seconds() - before
-        seconds[label] = max(time.perf_counter() - start - compiled[label], 0.0)
+        seconds[label] = time.perf_counter() - start
     # One denominator for every backend: the reference's hand volume (its own union, if any).
     hand_volume = float(instances[-1].hand_volume(grasp))
     values = {label: v.ravel() / hand_volume for label, v in volumes.items()}
@@ -198,7 +184,7 @@ def compare_backends(
         columns[f"diff_{label}"] = values[label] - ref
         columns[f"rel_{label}"] = (values[label] - ref) / np.maximum(ref, RELATIVE_FLOOR)
         summary[label] = _summary(values[label], ref)
-    return Comparison(columns, summary, seconds, reference, labels, compiled)
+    return Comparison(columns, summary, seconds, reference, labels)
 
 
 def write_table(table: dict[str, np.ndarray], path: str | os.PathLike) -> Path:

@@ -21,7 +21,7 @@ from exactgrasp.errors import DescriptorError
 from exactgrasp.grasp import Grasp
 from exactgrasp.paths.presets import as_sampler
 from exactgrasp.paths.sampler import PathSampler
-from exactgrasp.progress import compile_seconds, progress_bar
+from exactgrasp.progress import progress_bar
 
 DISTANCE_KINDS = ("l2", "l2_diff", "cbrt")
 
@@ -36,10 +36,10 @@ class Descriptor:
     metadata : dict
         How it was made: ``sampler``, ``backend``, ``backend_params``, ``version``,
         ``hand_hash``, ``object_hash``, ``grasp``, ``hand_volume``, ``seconds`` (wall
-        seconds), ``compile_seconds`` (of them, those spent compiling the kernels: first use
-        in a process only), and the
-        checks of `exactgrasp.diagnostics.check_descriptor` (``max_value``,
-        ``volume_ratio``, ``warnings``, ...).
+        seconds), and the checks of `exactgrasp.diagnostics.check_descriptor`
+        (``max_value``, ``volume_ratio``, ``warnings``, ...). Files written before the kernels
+        were all compiled ahead of time may also hold ``compile_seconds`` (of ``seconds``,
+        those spent compiling kernels); it is kept as read, and nothing uses it.
 
     Attributes
     ----------
@@ -173,7 +173,7 @@ def compute_descriptor(
 
     sampler = as_sampler(sampler)
     backend = as_backend(backend)
-    start, compiling = time.perf_counter(), compile_seconds()
+    start = time.perf_counter()
     volumes = compute_volumes(grasp, sampler.poses(), backend, progress, f"{backend.name} poses")
     # The backend's own union where it has one (the exact backend's), not a second one.
     hand_volume = float(backend.hand_volume(grasp))
@@ -184,7 +184,6 @@ def compute_descriptor(
             f"grasp {grasp.name!r}; this is a bug in the backend, please report it."
         )
     seconds = time.perf_counter() - start
-    compiled = min(compile_seconds() - compiling, seconds)
     metadata = {
         "grasp": grasp.name,
         "sampler": sampler.params,
@@ -198,7 +197,6 @@ def compute_descriptor(
         "hand_volume_m3": hand_volume / grasp.frame.scale**3,
         "frame": grasp.frame.to_dict(),
         "seconds": seconds,
-        "compile_seconds": compiled,
     }
     values = volumes / hand_volume
     # Warn once about suspicious grasps and record the checks (docs/diagnostics.md).

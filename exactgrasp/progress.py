@@ -1,5 +1,4 @@
-"""Progress bars on a terminal, plain log lines on a long call when stderr is not one, and
-the bars' clock still ticking while the package's kernels compile (first use only).
+"""Progress bars on a terminal, and plain log lines on a long call when stderr is not one.
 
 Where stderr is not a terminal (a log file, a pipe, a job's output) and nobody chose
 (``progress=None``), a bar's redrawn line would fill the log with carriage returns;
@@ -7,42 +6,28 @@ Where stderr is not a terminal (a log file, a pipe, a job's output) and nobody c
 a call has run that long, so a short call writes nothing.
 
 `progress_bar` gives a tqdm bar whose rate and time left leave out its first update: the first
-results of a run may include compiling the kernels, which happens once, and would make the
-rest look many times slower than it is.
-
-While a kernel compiles (`exactgrasp.compiling` prints the notice and counts the time), the
-open bars show "compiling kernels" and are redrawn every `TICK_SECONDS`: tqdm redraws on
-updates only, and none come while a kernel compiles. Layer 1: imports
-`exactgrasp.compiling` only.
+results of a run include what is built once per hand and object (grids, tables, solids), and
+would make the rest look many times slower than it is.
 """
 
 from __future__ import annotations
 
 import os
 import sys
-import threading
 import time
-import weakref
 from collections.abc import Callable
 from typing import IO
 
 from tqdm.auto import tqdm
 
-from exactgrasp.compiling import COMPILE_SECONDS, compile_seconds, on_compile
-
 __all__ = [
-    "COMPILE_SECONDS",
     "LOG_SECONDS",
-    "TICK_SECONDS",
     "ProgressBar",
     "ProgressLog",
-    "compile_seconds",
     "progress_bar",
     "progress_enabled",
 ]
 
-#: How often the open bars are redrawn while kernels compile (their clock keeps ticking).
-TICK_SECONDS = 0.5
 #: Fewest seconds between two lines of a `ProgressLog`, and before its first: often enough to
 #: show a long call moving, rarely enough to keep a log readable.
 LOG_SECONDS = 5.0
@@ -68,8 +53,6 @@ class ProgressBar(tqdm):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self._rate_started = False
-        if not self.disable:
-            _BARS.add(self)
 
     def update(self, n: int | float = 1) -> bool | None:
         """Add ``n`` items done (see `tqdm.tqdm.update`)."""
@@ -82,11 +65,6 @@ class ProgressBar(tqdm):
         self.last_print_t = self._time()
         self.refresh()
         return True
-
-    def close(self) -> None:
-        """Close the bar (see `tqdm.tqdm.close`)."""
-        _BARS.discard(self)
-        super().close()
 
 
 class ProgressLog:
@@ -165,34 +143,3 @@ def progress_bar(
     if enable is None and not progress_enabled() and not os.environ.get("EXACTGRASP_NO_PROGRESS"):
         return ProgressLog(total, desc)
     return ProgressBar(total=total, desc=desc, disable=not progress_enabled(enable), leave=False)
-
-
-# -- while kernels compile ---------------------------------------------------------------------
-
-#: The bars open now, told when kernels compile.
-_BARS: weakref.WeakSet[ProgressBar] = weakref.WeakSet()
-_DONE = threading.Event()
-
-
-def _tick() -> None:
-    while not _DONE.wait(TICK_SECONDS):
-        for bar in list(_BARS):
-            bar.refresh()
-
-
-def _compiling(started: bool) -> None:
-    """Mark the open bars and keep redrawing them while kernels compile."""
-    if started:
-        if _BARS:
-            for bar in list(_BARS):
-                bar.set_postfix_str("compiling kernels", refresh=True)
-            _DONE.clear()
-            threading.Thread(target=_tick, daemon=True).start()
-        return
-    _DONE.set()
-    for bar in list(_BARS):
-        if bar.postfix:
-            bar.set_postfix_str("", refresh=True)
-
-
-on_compile(_compiling)

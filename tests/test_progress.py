@@ -1,73 +1,12 @@
-"""Progress bars and the compile notice: one line on a cold numba cache, none on a warm one."""
+"""Progress bars, and plain log lines where stderr is not a terminal."""
 
 from __future__ import annotations
 
 import io
-import os
-import re
-import subprocess
 import sys
-import time
-from pathlib import Path
-
-from numba.core import event
 
 from exactgrasp import progress
-from exactgrasp.progress import (
-    COMPILE_SECONDS,
-    ProgressBar,
-    ProgressLog,
-    compile_seconds,
-    progress_bar,
-)
-
-ROOT = Path(__file__).resolve().parents[1]
-
-# A user's own compiled function (no notice), then one of the package's smallest kernels.
-SCRIPT = """
-import sys
-sys.path.insert(0, {root!r})
-import numba
-import exactgrasp.geometry.predicates as predicates
-
-@numba.njit
-def users_own(x):
-    return x + 1.0
-
-users_own(1.0)
-print("notice below", file=sys.stderr)
-predicates.orient_bound(1.0)
-predicates.orient_bound(2.0)
-"""
-
-
-def _stderr(cache: Path, **env: str) -> str:
-    """stderr of `SCRIPT` run in a fresh process with ``NUMBA_CACHE_DIR=cache``."""
-    environ = {k: v for k, v in os.environ.items() if k != "EXACTGRASP_NO_PROGRESS"}
-    environ.update(NUMBA_CACHE_DIR=str(cache), **env)
-    out = subprocess.run(
-        [sys.executable, "-c", SCRIPT.format(root=str(ROOT))],
-        env=environ,
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=300,
-    )
-    return out.stderr
-
-
-def test_compile_notice_prints_once_on_a_cold_cache_only(tmp_path):
-    fewest, most = COMPILE_SECONDS["geometry"]
-    line = (
-        f"compiling exactgrasp kernels (geometry), first use only ({fewest}-{most} s on an "
-        "idle 2-core machine, longer on a busy one)"
-    )
-    cold = _stderr(tmp_path / "cache")
-    assert cold.splitlines() == ["notice below", line]
-    warm = _stderr(tmp_path / "cache")
-    assert warm.splitlines() == ["notice below"]
-    quiet = _stderr(tmp_path / "other", EXACTGRASP_NO_PROGRESS="1")
-    assert quiet.splitlines() == ["notice below"]
+from exactgrasp.progress import ProgressBar, ProgressLog, progress_bar
 
 
 class _Clock:
@@ -84,7 +23,7 @@ def test_bar_rate_leaves_out_the_first_update(tmp_path):
         clock = _Clock()
         bar._time = clock
         bar.start_t = bar.last_print_t = clock()
-        clock.now += 30.0  # the first results, compiling included
+        clock.now += 30.0  # the first results, the hand's grids and tables included
         bar.update(10)
         assert bar.n == 10
         assert not bar.format_dict["rate"]
@@ -98,26 +37,6 @@ def test_disabled_bar_counts_nothing():
     with progress_bar(5, "poses", False) as bar:
         bar.update(3)
         assert bar.disable
-
-
-def test_the_clock_keeps_ticking_and_the_time_is_counted_while_compiling():
-    """A compilation of 1.3 s with no update of the bar: the bar is redrawn every
-    `TICK_SECONDS` with its elapsed time, and `compile_seconds` grows by those 1.3 s."""
-    sink = io.StringIO()
-    bar = ProgressBar(total=10, desc="exact poses", file=sink, mininterval=0)
-    before = compile_seconds()
-    event.start_event("numba:compile", data={"dispatcher": None})
-    try:
-        time.sleep(1.3)
-        assert compile_seconds() - before >= 1.3  # counted while it runs, too
-    finally:
-        event.end_event("numba:compile", data={"dispatcher": None})
-        text = sink.getvalue()
-        bar.close()
-    clocks = re.findall(r"00:0(\d)", text)
-    assert "1" in clocks, text  # drawn at 00:01, with no update of the bar
-    assert text.count("\r") >= 1.3 / progress.TICK_SECONDS
-    assert 1.3 <= compile_seconds() - before < 2.5
 
 
 # -- plain lines where stderr is not a terminal --------------------------------------------------

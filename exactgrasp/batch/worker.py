@@ -175,12 +175,7 @@ def compute_rows(
             with thread_limit(1 if single_thread else None):
                 descriptor = compute_descriptor(grasp, sampler, engine, progress=False)
             # Timings differ run to run; the rest of the metadata is a function of the input.
-            # Timings differ run to run; the output does not.
-            metadata = {
-                k: v
-                for k, v in descriptor.metadata.items()
-                if k not in ("seconds", "compile_seconds")
-            }
+            metadata = {k: v for k, v in descriptor.metadata.items() if k != "seconds"}
             result["values"] = descriptor.values.ravel()
             result["metadata"] = json.dumps(metadata, sort_keys=True)
             result.update(error=None, message=None)

@@ -179,13 +179,8 @@ def options_named(args: argparse.Namespace, *names: str) -> dict[str, Any]:
 
 
 def timing(metadata: dict) -> str:
-    """``in 2.31 s``, with the seconds spent compiling the kernels said apart (a descriptor's
-    ``seconds`` include them; they are spent once, on first use)."""
-    compiled = float(metadata.get("compile_seconds", 0.0))
-    text = f"in {metadata['seconds'] - compiled:.2f} s"
-    if compiled >= 0.05:
-        text += f" (and {compiled:.1f} s compiling the kernels, first use only)"
-    return text
+    """``in 2.31 s``: a descriptor's wall ``seconds``, from its metadata."""
+    return f"in {metadata['seconds']:.2f} s"
 
 
 # -- --backend -------------------------------------------------------------------------------

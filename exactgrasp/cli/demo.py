@@ -139,7 +139,7 @@ def run_demo(
     grasps = demo_grasps()
     descriptors: dict[tuple[str, str], Descriptor] = {}
     rows = []
-    print(f"{'grasp':>12} {'backend':>8} {'seconds':>8} {'compile':>8} {'mean':>9} {'max':>9}")
+    print(f"{'grasp':>12} {'backend':>8} {'seconds':>8} {'mean':>9} {'max':>9}")
     for grasp in grasps:
         for backend in backends:
             d = compute_descriptor(grasp, sampler, backend=engines[backend], progress=progress)
@@ -148,21 +148,15 @@ def run_demo(
             row = {
                 "grasp": grasp.name,
                 "backend": backend,
-                "seconds": d.metadata["seconds"] - d.metadata["compile_seconds"],
-                "compile_seconds": d.metadata["compile_seconds"],
+                "seconds": d.metadata["seconds"],
                 "mean": float(d.values.mean()),
                 "max": float(d.values.max()),
             }
             rows.append(row)
             print(
                 f"{grasp.name:>12} {backend:>8} {row['seconds']:8.2f} "
-                f"{row['compile_seconds']:8.2f} {row['mean']:9.5f} {row['max']:9.5f}"
+                f"{row['mean']:9.5f} {row['max']:9.5f}"
             )
-    if any(row["compile_seconds"] >= 0.05 for row in rows):
-        print(
-            "seconds: computing; compile: compiling the kernels on their first use in this "
-            "process (once per machine: later runs load them from numba's cache)"
-        )
     _plot(descriptors, out / "descriptors.png")
     (out / "summary.json").write_text(json.dumps(rows, indent=1))
     print(f"wrote {out / 'descriptors.png'}, {out / 'summary.json'} and the .npz descriptors")
