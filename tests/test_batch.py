@@ -427,7 +427,8 @@ def test_the_cluster_recipe_exports_the_local_clusters_settings():
     # What dask reads back from those variables is the local cluster's settings.
     read = dask.config.collect_env(env)
     assert {key: dask.config.get(key, config=read) for key in WORKER_CONFIG} == WORKER_CONFIG
-    assert env["NUMBA_NUM_THREADS"] == "1"
+    assert env["OMP_NUM_THREADS"] == env["OPENBLAS_NUM_THREADS"] == "1"
+    assert not any(name.startswith("NUMBA") for name in env)
     exports = " ".join(
         line.removeprefix("export ")
         for line in (DOCS / "batch.md").read_text().splitlines()

@@ -3,9 +3,7 @@
 A batch worker runs one task per thread it was given, and each task computes on one thread;
 every library that keeps a thread pool of its own must then use one thread per task too:
 
-* numba (the exact kernels): `NUMBA_NUM_THREADS`, and
-  `exactgrasp.backends.base.thread_limit` around each row;
-* the voxel kernels (Cython, compiled with the package): Python threads, as many as
+* the exact and voxel kernels (Cython, compiled with the package): Python threads, as many as
   `exactgrasp.backends.base.thread_limit` allows around each row;
 * BLAS and OpenMP (numpy, scipy): `OMP_NUM_THREADS`, `OPENBLAS_NUM_THREADS`,
   `MKL_NUM_THREADS`, read when those libraries load, so set before the worker starts
@@ -33,9 +31,8 @@ from exactgrasp.geometry.manifold import start_thread_pool
 __all__ = ["THREAD_ENV", "limit_threads", "threads_limited"]
 
 #: Set in local worker processes before they start (and by `limit_threads` for libraries not
-#: loaded yet): one thread per task for numba, OpenMP and BLAS.
+#: loaded yet): one thread per task for OpenMP and BLAS.
 THREAD_ENV = {
-    "NUMBA_NUM_THREADS": "1",
     "OMP_NUM_THREADS": "1",
     "MKL_NUM_THREADS": "1",
     "OPENBLAS_NUM_THREADS": "1",

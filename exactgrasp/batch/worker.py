@@ -75,7 +75,7 @@ def cluster_environment() -> dict[str, str]:
     Returns
     -------
     dict of str to str
-        ``{"NUMBA_NUM_THREADS": "1", ..., "DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL": "500ms",
+        ``{"OMP_NUM_THREADS": "1", ..., "DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL": "500ms",
         ...}``; ``docs/batch.md`` lists the same exports.
     """
     config = {
@@ -135,7 +135,7 @@ def compute_rows(
         The exactgrasp version and backend parameters of the run; rows fail when this worker's
         differ.
     single_thread : bool
-        Compute each row on one thread, numba, BLAS and manifold3d included
+        Compute each row on one thread, BLAS and manifold3d included
         (`exactgrasp.batch.threads`): a worker has one thread per core it may use. False
         leaves backends given ``n_jobs=None`` every core.
 
@@ -194,7 +194,7 @@ def compute_rows(
 
 def warm_up(backend: str | Backend) -> str:
     """Ready this worker process before any row: threads limited (`limit_threads`), MuJoCo
-    imported, the backend built, its compiled kernels loaded from numba's cache.
+    imported, the backend built, its compiled kernels loaded.
 
     The kernels load by computing one pose of a small made-up grasp (a box hand, a box
     object), whose hand is no dataset's: the hands the rows use are still prepared, and
