@@ -60,7 +60,7 @@ if TYPE_CHECKING:
     from exactgrasp.view import show
 
 # Every other public name loads on first use (`exactgrasp.lazy`): ``import exactgrasp`` and the
-# command line's ``--help`` do not pay for numba, trimesh, scipy and mujoco.
+# command line's ``--help`` do not pay for trimesh, scipy, mujoco and the compiled kernels.
 __getattr__, __dir__ = lazy_names(
     __name__,
     {

@@ -4,7 +4,7 @@
 `exactgrasp.errors.warn_caller`) about grasps whose descriptor is probably not what was meant,
 and returns the metadata entries that record it; `exactgrasp.descriptor.compute_descriptor`
 calls it. `third_party_warnings_ignored` keeps warnings raised inside the libraries under
-exactgrasp (dask, numba, trimesh, ...) from the users of `run_batch` and of the command line.
+exactgrasp (dask, trimesh, mujoco, ...) from the users of `run_batch` and of the command line.
 See ``docs/diagnostics.md``.
 """
 
@@ -61,10 +61,10 @@ MINKOWSKI_POINTS = 1_000_000
 #: Points tested against a hull at a time by the touching test, which stops at the first inside.
 INSIDE_BLOCK = 64
 #: Top-level packages whose own warnings `third_party_warnings_ignored` drops: the libraries
-#: exactgrasp calls, and the ones they call (dask's stack, numba's compiler).
+#: exactgrasp calls, and the ones they call (dask's stack).
 THIRD_PARTY_PACKAGES = (
     "dask", "distributed", "tornado", "cloudpickle", "msgpack", "zict", "toolz", "tlz",
-    "partd", "fsspec", "psutil", "bokeh", "pandas", "pyarrow", "numba", "llvmlite", "numpy",
+    "partd", "fsspec", "psutil", "bokeh", "pandas", "pyarrow", "numpy",
     "scipy", "trimesh", "networkx", "rtree", "lxml", "manifold3d", "mujoco", "coal", "fcl",
     "pymeshfix", "pyvista", "vtk", "matplotlib", "PIL", "plotly", "tqdm", "jsonschema",
 )  # fmt: skip

@@ -2,9 +2,10 @@
 
 `lazy_names` makes the ``__getattr__`` and ``__dir__`` of a package (PEP 562) from a table of
 public names and the modules that define them. The command line's ``--help`` imports the
-package without the numerical libraries (numba, trimesh, scipy, mujoco) that its modules pull
-in; they load when a name that needs them is first used. Each package also imports the same
-names under ``TYPE_CHECKING``, so that type checkers, editors and the API reference see them.
+package without the numerical libraries (trimesh, scipy, mujoco, the compiled kernels) that its
+modules pull in; they load when a name that needs them is first used. Each package also imports
+the same names under ``TYPE_CHECKING``, so that type checkers, editors and the API reference
+see them.
 
 """
 

@@ -191,7 +191,7 @@ def _third_party(name: str):
     return namespace["noisy"]
 
 
-@pytest.mark.parametrize("module", ["distributed.worker", "dask", "numba.core.errors", "trimesh"])
+@pytest.mark.parametrize("module", ["distributed.worker", "dask", "scipy.sparse", "trimesh"])
 def test_third_party_warnings_stop_ours_pass(module):
     noisy = _third_party(module)
     before = list(warnings.filters)
@@ -219,8 +219,8 @@ def test_a_package_named_like_a_library_is_not_filtered():
 
 @pytest.fixture
 def noisy_voxel(monkeypatch):
-    """The voxel backend, raising a dask-internal and a numba-internal warning per call."""
-    internals = [_third_party("distributed.client"), _third_party("numba.core.typed_passes")]
+    """The voxel backend, raising a dask-internal and a mujoco-internal warning per call."""
+    internals = [_third_party("distributed.client"), _third_party("mujoco.renderer")]
     volumes = VoxelBackend.volumes
 
     def noisy_volumes(self, grasp, poses):

@@ -55,7 +55,8 @@ class BackendEntry(NamedTuple):
     requires: tuple[tuple[str, str, str], ...] = ()
 
 
-#: The built-in backends (numba and manifold3d, which they need, are core dependencies).
+#: The built-in backends (manifold3d, which they need, is a core dependency; their kernels are
+#: compiled with the package).
 BUILTIN_BACKENDS: dict[str, BackendEntry] = {
     "voxel": BackendEntry("exactgrasp.backends.voxel:VoxelBackend"),
     "exact": BackendEntry("exactgrasp.backends.exact:ExactBackend"),

@@ -72,7 +72,7 @@ def sampling_figure(sampling: dict, path: Path) -> Path:
     """AUC (with interval) and noise separation against poses per grasp, per backend.
 
     Poses (paths x steps), not seconds, on the x axis: the seconds measured on shared cores
-    carry one-off costs (compiling, grids) and are labelled beside the points instead.
+    carry one-off costs (grids, tables) and are labelled beside the points instead.
     """
     rows = [r for r in sampling["rows"] if r["n_steps"] == 9]
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))

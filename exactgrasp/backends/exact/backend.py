@@ -101,7 +101,7 @@ class ExactBackend(Backend):
         faces : bool
             As `ExactIntersector` takes it: moments per face of either mesh.
         """
-        # Here, not above: the class and its parameters load without numba, for ``--help``.
+        # Here, not above: the class and its parameters load without the kernels, for ``--help``.
         from exactgrasp.backends.exact.intersector import ExactIntersector
 
         return ExactIntersector(hand_links, object_bodies, options=self.options, faces=faces)

@@ -1,11 +1,10 @@
 """The exact kernel's data, as named tuples: what each table holds, its shape, dtype and units.
 
-numba compiles a `typing.NamedTuple` as a tuple whose fields it reads by name, so the kernels
-take these as they are (``grid.cell_faces``, not ``grid[5]``). In hot loops a kernel unpacks
-the fields it needs once, into locals: reading a field inside a loop over faces would update
-the arrays' reference counts there. Lengths are in the meshes' units, local coordinates (about
-the centre of the hand's bounds, see `intersector.ExactIntersector`). The tables are built by
-`prepare` and `grids`.
+The compiled kernels read them through the extension types of ``_tables.pxd``, one per named
+tuple, field for field, made from the tuple with its arrays shared, not copied (a kernel reads
+``grid.cell_faces`` as Python does, never ``grid[5]``). Lengths are in the meshes' units, local
+coordinates (about the centre of the hand's bounds, see `intersector.ExactIntersector`). The
+tables are built by `prepare` and `grids`.
 
 Long because every table of the kernels is declared here, each field with its shape, dtype and
 units: one place to read what the kernels take.
