@@ -19,10 +19,6 @@ $(STAMP): pyproject.toml
 	@# calling this environment's meson, ninja and cython (found by their full paths).
 	PATH="$(CURDIR)/$(BIN):$$PATH" CYTHON="$(CURDIR)/$(BIN)/cython" \
 		$(BIN)/python -m pip install --quiet --no-build-isolation -e ".[all,dev]"
-	@# Compile the numba kernels that remain (the exact backend's, the geometry's predicates)
-	@# here, once (numba caches them), so that the timings of `make demo` and of the first
-	@# runs are those of warm kernels. The Cython kernels were compiled by the install.
-	$(BIN)/exactgrasp demo --quick --no-progress --out $(VENV)/compiled-kernels >/dev/null
 	touch $(STAMP)
 
 demo: $(STAMP)
