@@ -8,8 +8,8 @@ row uses the same Barrett hand at its own joint angles.
 
 ``throughput``: for each backend, `exactgrasp.batch.run_batch` with **default options**
 (sampler, backend parameters, part size) and 1 and 2 local workers, alternating which goes
-first from one repeat to the next, the disk caches (numba's kernels, the rows' resolved
-objects) filled beforehand as any later run over a dataset finds them. Reported per run:
+first from one repeat to the next, the disk cache of the rows' resolved objects filled
+beforehand as any later run over a dataset finds them. Reported per run:
 grasps/s over ``compute_seconds`` (first task submitted to last part written; the workers'
 start-up inside it, the cluster's start outside), the workers' CPU seconds over their busy
 seconds (their thread use: 1.00 is one core each), each worker's busy seconds, and the 1-minute
@@ -125,9 +125,9 @@ def machine_speedup(processes: int = 2) -> float:
 
 
 def _warm(manifest: Path, backend: str) -> None:
-    """Fill the disk caches, numba's kernels and the rows' objects (`grasp.files.OBJECT_SOLIDS`),
-    as any run after the first over the same dataset finds them: no worker compiles, and every
-    run of every repeat reads the objects back alike."""
+    """Fill the disk cache of the rows' objects (`grasp.files.OBJECT_SOLIDS`), as any run after
+    the first over the same dataset finds it: every run of every repeat reads the objects back
+    alike."""
     rows = read_manifest(manifest).rows
     compute_rows(rows[:1], str(manifest.parent), backend, as_sampler(None).params)
     with warnings.catch_warnings():

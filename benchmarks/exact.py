@@ -113,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
             broadphase=None if args.broadphase == "none" else args.broadphase,
             n_jobs=args.n_jobs,
         )
-        ex.volumes(flat[:2])  # compile / warm caches outside the timing
+        ex.volumes(flat[:2])  # warm caches outside the timing
         build = time.perf_counter() - t0
         exact_runs, plain_runs = [], []
         for _ in range(max(1, args.repeat)):

@@ -4,7 +4,7 @@
 read from its file before each run (so nothing is cached from the run before), against the plain
 loop (one manifold3d boolean of the whole hand and the whole object per pose) timed in the same
 run on a subsample of poses and extrapolated per pose. Both are the median of ``--repeat`` runs
-(3 by default), the two alternating; one untimed descriptor first compiles the kernels.
+(3 by default), the two alternating; one untimed descriptor first loads the kernels.
 
 CPU seconds are reported beside wall seconds: on a shared machine they measure the work done.
 ``--stages`` also times, one by one, what the descriptor path does besides the kernel: the

@@ -4,8 +4,8 @@ Writes a hand of 17 STL link meshes and about 283k triangles, the size of a dext
 exported from Onshape, with the same defects: 7 links made of two parts that share an edge
 (edges of four faces) and a palm of 82k triangles whose surface passes through itself (1,704
 crossing triangle pairs, more than real exports have). Then times ``Hand.from_mjcf`` in fresh
-processes: the first with an empty solid cache, then with the cache the first one wrote. Any
-numba kernel the load runs is compiled (and cached) before either is timed.
+processes: the first with an empty solid cache, then with the cache the first one wrote. One
+untimed load first brings the package's files into the operating system's cache.
 
     python benchmarks/messy_hand.py [--repeat 3] [--json out.json]
 """
@@ -112,7 +112,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         path, n_faces = write_hand(folder)
-        load_seconds(path, folder / "warm-up-cache")  # compiles any numba kernel it runs
+        load_seconds(path, folder / "warm-up-cache")  # the package's files read once, untimed
         first, again, volumes = [], [], set()
         for k in range(args.repeat):
             cache = folder / f"cache{k}"

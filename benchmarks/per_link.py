@@ -185,7 +185,7 @@ def main() -> int:
         f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}",
         flush=True,
     )
-    for backend in ("exact", "voxel"):  # numba's kernels compiled or loaded before any timing
+    for backend in ("exact", "voxel"):  # each backend's kernels loaded before any timing
         warm_up(backend)
     voxel = VoxelBackend()
     figures = []

@@ -10,8 +10,8 @@ library's defaults, as a user calls it::
 
 Timed in one run, each figure the median of ``--repeats`` runs:
 
-* first call: a fresh Python process per run (the voxel kernels compiled when the package was
-  built; numba kernels that remain already in numba's disk cache): the import, then
+* first call: a fresh Python process per run (the kernels compiled when the package was
+  built): the import, then
   ``Grasp.from_file`` and the descriptor;
 * warm call: ``Grasp.from_file`` and the descriptor again in this process (what a second
   descriptor of the same hand and object costs), and the parts a first call builds, each
