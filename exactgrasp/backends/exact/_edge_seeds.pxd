@@ -1,0 +1,224 @@
+# cython: language_level=3
+"""Stage "seeds" of the exact kernel, its first search (Cython, inline): the object's edges
+near the hand's surface, each walking the hand-grid cells it passes, against the hand faces
+listed there (`object_edge_seeds`, in the hand's frame). The pairs go to the seed buffer
+(`_append_seed`, which the second search, `_seeds.cotree_seeds`, shares). ``_seeds.pxd``
+explains why the two searches find a pair on every curve where the surfaces cross.
+"""
+
+from libc.math cimport INFINITY, fabs, floor
+from libc.stdint cimport int64_t, uint8_t
+
+from exactgrasp.backends.exact._cells cimport surface_cells_in
+from exactgrasp.backends.exact._constants cimport CHUNK, FILTER_ERR, GRID_MARGIN, PLANE_TOL
+from exactgrasp.backends.exact._filters cimport (
+    cell_row, cell_survivors, dmax, dmin, filter_row, may_cross, piece_box, piece_meets_cell,
+    piece_survivors,
+)
+from exactgrasp.backends.exact._tables cimport (
+    CellGrid, MeshTables, ObjectTables, SideTables, Workspace,
+)
+
+
+cdef inline int64_t _append_seed(
+    int64_t[:, ::1] seeds, int64_t n, int64_t t, int64_t s
+) noexcept nogil:
+    """Pair (hand face t, object face s) as row n of ``seeds`` unless row n - 1 holds it: the new
+    count, or -1 when the buffer is full."""
+    if n > 0 and seeds[n - 1, 0] == t and seeds[n - 1, 1] == s:
+        return n
+    if n >= seeds.shape[0]:
+        return -1
+    seeds[n, 0] = t
+    seeds[n, 1] = s
+    return n + 1
+
+
+cdef inline int64_t _clamp(int64_t i, int64_t top) noexcept nogil:
+    """``min(max(i, 0), top)``."""
+    if 0 > i:
+        i = 0
+    return top if top < i else i
+
+
+cdef inline bint _edge_box_near(
+    CellGrid grid, int64_t[:, ::1] rng, double px, double py, double pz, double qx,
+    double qy, double qz, double ih, double margin,
+) noexcept nogil:
+    """Whether the box of cells of edge p q (grown by ``margin``; its index ranges into ``rng``
+    (3, 2), clipped) holds a surface cell of the grid."""
+    cdef double a, b
+    cdef int64_t d, i0, i1
+    for d in range(3):
+        a = px if d == 0 else (py if d == 1 else pz)
+        b = qx if d == 0 else (qy if d == 1 else qz)
+        i0 = <int64_t>floor((dmin(a, b) - margin - grid.corner[d]) * ih)
+        i1 = <int64_t>floor((dmax(a, b) + margin - grid.corner[d]) * ih)
+        if i1 < 0 or i0 >= grid.shape[d]:
+            return False
+        rng[d, 0] = i0 if i0 > 0 else 0
+        rng[d, 1] = grid.shape[d] - 1 if grid.shape[d] - 1 < i1 else i1
+    return surface_cells_in(grid.surface_table, grid.shape, rng) != 0
+
+
+ctypedef (double, double) Span
+
+
+cdef inline Span _grid_span(
+    CellGrid grid, double px, double py, double pz, double dx, double dy, double dz
+) noexcept nogil:
+    """The parameter range (l0, l1) of the edge ``p + lambda d``, lambda in [0, 1], inside the
+    grid's box (l0 > l1: outside)."""
+    cdef double l0 = 0.0, l1 = 1.0, o, dd, size, ta, tb
+    cdef int64_t d
+    for d in range(3):
+        o = (px if d == 0 else (py if d == 1 else pz)) - grid.corner[d]
+        dd = dx if d == 0 else (dy if d == 1 else dz)
+        size = grid.shape[d] * grid.cell
+        if dd == 0.0:
+            if o < 0.0 or o > size:
+                l0 = 2.0
+            continue
+        ta, tb = -o / dd, (size - o) / dd
+        l0 = dmax(l0, dmin(ta, tb))
+        l1 = dmin(l1, dmax(ta, tb))
+    return l0, l1
+
+
+cdef inline int64_t _piece_seeds(
+    SideTables hand, CellGrid grid, Workspace work, int64_t c, double ax_, double ay_,
+    double az_, double bx_, double by_, double bz_, double px, double py, double pz,
+    double qx, double qy, double qz, int64_t s1, double gscale, double margin, double ptol,
+    int64_t n,
+) noexcept nogil:
+    """The pairs (hand face, object face ``s1``) of the piece a b, in cell c, of the object
+    edge p q: the hand faces listed in c whose clipped boxes meet the piece and that pass the
+    plane and edge tests, appended to ``work.seeds`` from row n. Returns the new count, or -1
+    when the buffer is full."""
+    cdef double x0, y0, z0, x1, y1, z1, eps
+    cdef int64_t m, kept, j, ft
+    x0, y0, z0, x1, y1, z1 = piece_box(ax_, ay_, az_, bx_, by_, bz_, margin)
+    if not piece_meets_cell(
+        cell_row(grid.bounds, c), ax_, ay_, az_, bx_, by_, bz_, x0, y0, z0, x1, y1, z1, margin
+    ):
+        return n
+    m = cell_survivors(
+        grid.cell_start, grid.group_start, grid.groups, grid.boxes, c, x0, y0, z0, x1, y1, z1,
+        work.survivors,
+    )
+    kept = piece_survivors(grid.boxes, work.survivors, m, ax_, ay_, az_, bx_, by_, bz_, margin)
+    for j in range(kept):
+        ft = grid.cell_faces[work.survivors[j]]
+        # Both ends beyond the tolerance on one side: no crossing. Else the crossing point
+        # must not lie beyond it outside an edge of the face.
+        eps = (hand.filter_err[ft] + FILTER_ERR) * gscale
+        if not may_cross(filter_row(hand.filters, ft), px, py, pz, qx, qy, qz, eps, ptol, gscale):
+            continue
+        n = _append_seed(work.seeds, n, ft, s1)
+        if n < 0:
+            return -1
+    return n
+
+
+cdef inline int64_t _edge_walk(
+    SideTables hand, CellGrid grid, Workspace work, double px, double py, double pz,
+    double qx, double qy, double qz, double l0, double l1, int64_t s1, double gscale,
+    double ih, double margin, double ptol, int64_t n,
+) noexcept nogil:
+    """Line walk (Amanatides and Woo) of the object edge p q over [l0, l1] (its part inside
+    the grid): the cells in order, each with its piece [lam_a, lam_b] of the edge
+    (consecutive pieces share their ends), through `_piece_seeds`. Returns the new count, or
+    -1 when the seed buffer is full."""
+    cdef double h = grid.cell, dx = qx - px, dy = qy - py, dz = qz - pz
+    cdef double tx, ty, tz, gx, gy, gz, lam_a, lam_b
+    cdef int64_t n0 = grid.shape[0], n1 = grid.shape[1], n2 = grid.shape[2]
+    cdef int64_t ix, iy, iz, sx, sy, sz, c
+    ix = _clamp(<int64_t>floor((px + l0 * dx - grid.corner[0]) * ih), n0 - 1)
+    iy = _clamp(<int64_t>floor((py + l0 * dy - grid.corner[1]) * ih), n1 - 1)
+    iz = _clamp(<int64_t>floor((pz + l0 * dz - grid.corner[2]) * ih), n2 - 1)
+    sx = 1 if dx > 0 else -1
+    sy = 1 if dy > 0 else -1
+    sz = 1 if dz > 0 else -1
+    tx = (grid.corner[0] + (ix + (1 if dx > 0 else 0)) * h - px) / dx if dx != 0 else INFINITY
+    ty = (grid.corner[1] + (iy + (1 if dy > 0 else 0)) * h - py) / dy if dy != 0 else INFINITY
+    tz = (grid.corner[2] + (iz + (1 if dz > 0 else 0)) * h - pz) / dz if dz != 0 else INFINITY
+    gx = h / fabs(dx) if dx != 0 else INFINITY
+    gy = h / fabs(dy) if dy != 0 else INFINITY
+    gz = h / fabs(dz) if dz != 0 else INFINITY
+    lam_a = l0
+    while True:
+        lam_b = dmin(dmin(dmin(tx, ty), tz), l1)
+        c = (ix * n1 + iy) * n2 + iz
+        if grid.cell_start[c + 1] > grid.cell_start[c]:
+            n = _piece_seeds(
+                hand, grid, work, c, px + lam_a * dx, py + lam_a * dy, pz + lam_a * dz,
+                px + lam_b * dx, py + lam_b * dy, pz + lam_b * dz, px, py, pz, qx, qy, qz,
+                s1, gscale, margin, ptol, n,
+            )
+            if n < 0:
+                return -1
+        if lam_b >= l1:
+            break
+        lam_a = lam_b
+        if tx <= ty and tx <= tz:
+            ix += sx
+            tx += gx
+            if ix < 0 or ix >= n0:
+                break
+        elif ty <= tz:
+            iy += sy
+            ty += gy
+            if iy < 0 or iy >= n1:
+                break
+        else:
+            iz += sz
+            tz += gz
+            if iz < 0 or iz >= n2:
+                break
+    return n
+
+
+cdef inline int64_t object_edge_seeds(
+    MeshTables object_mesh, ObjectTables obj, SideTables hand, CellGrid hand_grid,
+    const double[:, ::1] BV, const uint8_t[::1] near, double gscale, Workspace work,
+    int64_t n,
+) noexcept nogil:
+    """Candidate pairs of the object's edges near the hand's surface (runs ``near``, see
+    `near_runs`): each edge walks the hand-grid cells it passes (`_edge_walk`, moved vertices
+    ``BV``), and the hand faces listed there whose cell-clipped box meets the edge's piece in
+    the cell and that pass the plane and edge tests give the pair (hand face, the edge's first
+    face). Appended to ``work.seeds`` from row ``n``; returns the new count, or -1 when the
+    buffer is full. ``gscale`` bounds every coordinate of the pose.
+
+    A crossing point lies in some cell the edge passes, and the face holding it is listed
+    there with its box clipped to that cell (both grown by `GRID_MARGIN`, far above the walk's
+    rounding)."""
+    cdef double h = hand_grid.cell
+    cdef double ih = 1.0 / h, margin = GRID_MARGIN * h, ptol = PLANE_TOL * h
+    cdef double px, py, pz, qx, qy, qz, l0, l1
+    cdef int64_t r, kk, top, f, u, v, s1
+    for r in range(near.shape[0]):
+        if not near[r]:
+            continue
+        top = r * CHUNK + CHUNK
+        if obj.edge_order.shape[0] < top:
+            top = obj.edge_order.shape[0]
+        for kk in range(r * CHUNK, top):
+            f = obj.edge_order[kk]
+            u, v = object_mesh.edges[f, 0], object_mesh.edges[f, 1]
+            px, py, pz = BV[u, 0], BV[u, 1], BV[u, 2]
+            qx, qy, qz = BV[v, 0], BV[v, 1], BV[v, 2]
+            # The edge's box of cells must hold a surface cell.
+            if not _edge_box_near(hand_grid, work.cell_range, px, py, pz, qx, qy, qz, ih, margin):
+                continue
+            s1 = object_mesh.edge_faces[f, 0]
+            l0, l1 = _grid_span(hand_grid, px, py, pz, qx - px, qy - py, qz - pz)
+            if l0 > l1:
+                continue
+            n = _edge_walk(
+                hand, hand_grid, work, px, py, pz, qx, qy, qz, l0, l1, s1, gscale, ih, margin,
+                ptol, n,
+            )
+            if n < 0:
+                return -1
+    return n

@@ -1,0 +1,278 @@
+# cython: language_level=3
+"""Stage "seeds" of the exact kernel (Cython, inline): candidate face pairs from which `search`
+traces the curves where the two surfaces cross.
+
+Every such curve is closed. Either it crosses an edge of the object, or it lies in one object
+face; then it is a plane's section of the hand, visits each hand face once (a plane cuts a
+triangle in one segment) and moves from face to face across hand edges: a cycle of the hand's
+dual graph, so it crosses a co-tree edge of the hand (`prepare.cotree_edges`). Two searches
+therefore find a pair on every curve: each object edge near the hand's surface against the
+hand faces listed in the hand-grid cells it passes (`object_edge_seeds`, in the hand's frame),
+and each co-tree edge near the object's surface against the object faces listed in the
+object-grid cells it touches (`cotree_seeds`, in the object's frame); runs of edges far from
+the other surface are skipped first (`near_runs`). Both searches pass what they meet through
+the seeds' filters (`_filters`), whose tolerances exceed their rounding (and, in the object's
+frame, the pose's departure from a rotation): they may keep a pair that does not cross, which
+its evaluation rejects, and never drop one that does. See "Method", step 2, in
+``docs/exact-backend.md``.
+
+The first search's stages are ``_edge_seeds.pxd`` (`object_edge_seeds` and the seed buffer's
+`_append_seed` are cimported here, so that a kernel cimports every stage of the seeds from
+this module).
+"""
+
+from libc.math cimport fabs, floor
+from libc.stdint cimport int64_t, uint8_t
+
+from exactgrasp.backends.exact._cells cimport surface_cells_in
+from exactgrasp.backends.exact._constants cimport (
+    COTREE_CHUNK, FILTER_ERR, GRID_MARGIN, PLANE_TOL, SPHERE_CENTRE, SPHERE_RADIUS,
+)
+from exactgrasp.backends.exact._edge_seeds cimport _append_seed, object_edge_seeds
+from exactgrasp.backends.exact._filters cimport (
+    cell_row, cell_survivors, dmax, filter_row, may_cross, piece_box, piece_meets_cell,
+    sphere_meets_cell,
+)
+from exactgrasp.backends.exact._predicates cimport max3
+from exactgrasp.backends.exact._tables cimport (
+    CellGrid, HandTables, MeshTables, SideTables, Workspace,
+)
+
+# `near_runs` scans the cells of a run's box only up to this many (long edges make big runs).
+cdef enum:
+    SCAN_CELLS = 27
+
+
+cdef inline double frame_defect(const double[:, :] R) noexcept nogil:
+    """How far R (3, 3) is from a rotation: the largest entry of ``|R^T R - I|``. Moving a
+    point back by ``R^T`` instead of the inverse errs by at most about this times its length."""
+    cdef double worst = 0.0, dot
+    cdef int64_t i, j
+    for i in range(3):
+        for j in range(3):
+            dot = R[0, i] * R[0, j] + R[1, i] * R[1, j] + R[2, i] * R[2, j]
+            worst = dmax(worst, fabs(dot - (1.0 if i == j else 0.0)))
+    return worst
+
+
+cdef inline bint _scan_cells(
+    CellGrid grid, const int64_t[:, ::1] rng, double m0, double m1, double m2, double r,
+    double margin,
+) noexcept nogil:
+    """Whether the sphere of centre (m0, m1, m2) and radius r may meet what one of the surface
+    cells of the box of cells ``rng`` (3, 2) holds (`sphere_meets_cell`)."""
+    cdef int64_t n1 = grid.shape[1], n2 = grid.shape[2]
+    cdef int64_t i, j, kk, c
+    cdef bint ok = False
+    for i in range(rng[0, 0], rng[0, 1] + 1):
+        for j in range(rng[1, 0], rng[1, 1] + 1):
+            for kk in range(rng[2, 0], rng[2, 1] + 1):
+                c = (i * n1 + j) * n2 + kk
+                if grid.cell_start[c + 1] == grid.cell_start[c]:
+                    continue
+                ok = ok | sphere_meets_cell(cell_row(grid.bounds, c), m0, m1, m2, r, margin)
+    return ok
+
+
+cdef inline bint _run_near(
+    const double[:, ::1] runs, int64_t k, const double[:, :] R, const double[:] t,
+    bint inverse, double stretch, double grow, bint scan, CellGrid grid,
+    int64_t[:, ::1] rng, double ih, double margin,
+) noexcept nogil:
+    """Whether run k of ``runs`` may come near the grid's surface (`near_runs`)."""
+    cdef double c0 = runs[k, SPHERE_CENTRE], c1 = runs[k, SPHERE_CENTRE + 1]
+    cdef double c2 = runs[k, SPHERE_CENTRE + 2]
+    cdef double r, m, m0 = 0.0, m1 = 0.0, m2 = 0.0
+    cdef int64_t d, i0, i1, cells
+    cdef bint ok = True
+    if inverse:
+        c0, c1, c2 = c0 - t[0], c1 - t[1], c2 - t[2]
+    r = (
+        runs[k, SPHERE_RADIUS] * stretch
+        + margin
+        + grow
+        + (stretch - 1.0) * (fabs(c0) + fabs(c1) + fabs(c2))
+    )
+    for d in range(3):
+        if inverse:
+            m = R[0, d] * c0 + R[1, d] * c1 + R[2, d] * c2
+        else:
+            m = R[d, 0] * c0 + R[d, 1] * c1 + R[d, 2] * c2 + t[d]
+        if d == 0:
+            m0 = m
+        elif d == 1:
+            m1 = m
+        else:
+            m2 = m
+        i0 = <int64_t>floor((m - r - grid.corner[d]) * ih)
+        i1 = <int64_t>floor((m + r - grid.corner[d]) * ih)
+        if i1 < 0 or i0 >= grid.shape[d]:
+            ok = False
+            break
+        rng[d, 0] = i0 if i0 > 0 else 0
+        rng[d, 1] = grid.shape[d] - 1 if grid.shape[d] - 1 < i1 else i1
+    ok = ok and surface_cells_in(grid.surface_table, grid.shape, rng) > 0
+    cells = (
+        (rng[0, 1] - rng[0, 0] + 1) * (rng[1, 1] - rng[1, 0] + 1) * (rng[2, 1] - rng[2, 0] + 1)
+    )
+    if ok and scan and cells <= SCAN_CELLS:
+        ok = _scan_cells(grid, rng, m0, m1, m2, r, margin)
+    return ok
+
+
+cdef inline void near_runs(
+    const double[:, ::1] runs, const double[:, :] R, const double[:] t, bint inverse,
+    double stretch, double grow, bint scan, CellGrid grid, int64_t[:, ::1] rng,
+    const uint8_t[::1] parent, int64_t per, uint8_t[::1] near,
+) noexcept nogil:
+    """Which runs of segments may come near a grid's surface (``near``, one per run): the
+    bounding sphere of each run (``runs`` (k, 4): centre, radius), moved by ``x -> R x + t``
+    (or by ``x -> R^T (x - t)`` with ``inverse``) into the grid's frame, its radius times
+    ``stretch`` (at least 1: R may stretch lengths a little) and grown by ``stretch - 1`` times
+    the centre's distance and by ``grow``, must hold a surface cell in its bounding box and,
+    with ``scan``, meet the box and the slab of what one of them holds
+    (`tables.CellGrid.bounds`; worth it where runs are small against the cells, and done where
+    the box spans at most `SCAN_CELLS` cells). Where ``parent`` is not empty, run k is tested
+    only if ``parent[k // per]`` (its block is near). ``rng``: scratch (3, 2)."""
+    cdef double ih = 1.0 / grid.cell
+    cdef double margin = GRID_MARGIN * grid.cell
+    cdef bint levels = parent.shape[0] > 0
+    cdef int64_t k
+    for k in range(runs.shape[0]):
+        if levels and not parent[k // per]:
+            near[k] = False
+            continue
+        near[k] = _run_near(
+            runs, k, R, t, inverse, stretch, grow, scan, grid, rng, ih, margin
+        )
+
+
+cdef inline int64_t _cotree_cell(
+    SideTables obj, CellGrid grid, Workspace work, int64_t c, double ax_, double ay_,
+    double az_, double bx_, double by_, double bz_, double x0, double y0, double z0,
+    double x1, double y1, double z1, double px, double py, double pz, double qx, double qy,
+    double qz, int64_t t1f, double gscale, double ferr, double grow, double ptol, int64_t n,
+) noexcept nogil:
+    """The pairs (hand face ``t1f``, object face) of the piece a b (its box (x0, y0, z0, x1,
+    y1, z1), grown by ``grow``) of the co-tree edge p q in object-grid cell c: the piece
+    against what the cell holds, then the listed faces' clipped boxes, each with one branch,
+    then the plane and edge tests. Appended to ``work.seeds`` from row n; returns the new
+    count, or -1 when the buffer is full."""
+    cdef int64_t m, jj, s
+    cdef double eps
+    if grid.cell_start[c + 1] == grid.cell_start[c]:
+        return n
+    if not piece_meets_cell(
+        cell_row(grid.bounds, c), ax_, ay_, az_, bx_, by_, bz_, x0, y0, z0, x1, y1, z1, grow
+    ):
+        return n
+    m = cell_survivors(
+        grid.cell_start, grid.group_start, grid.groups, grid.boxes, c, x0, y0, z0, x1, y1, z1,
+        work.survivors,
+    )
+    for jj in range(m):
+        s = grid.cell_faces[work.survivors[jj]]
+        eps = (obj.filter_err[s] + FILTER_ERR) * gscale + ferr
+        if not may_cross(filter_row(obj.filters, s), px, py, pz, qx, qy, qz, eps, ptol, gscale):
+            continue
+        n = _append_seed(work.seeds, n, t1f, s)
+        if n < 0:
+            return -1
+    return n
+
+
+cdef inline int64_t _cotree_piece(
+    SideTables obj, CellGrid grid, Workspace work, double la, double lb, double px,
+    double py, double pz, double qx, double qy, double qz, int64_t t1f, double gscale,
+    double ferr, double grow, double ptol, int64_t n,
+) noexcept nogil:
+    """The pairs of the piece [la, lb] of the co-tree edge p q: the object-grid cells its box
+    (grown by ``grow``) touches, each through `_cotree_cell` (a cell two pieces share is
+    tested twice). Returns the new count, or -1 when the seed buffer is full."""
+    cdef double ih = 1.0 / grid.cell
+    cdef double ax_ = px + la * (qx - px), ay_ = py + la * (qy - py), az_ = pz + la * (qz - pz)
+    cdef double bx_ = px + lb * (qx - px), by_ = py + lb * (qy - py), bz_ = pz + lb * (qz - pz)
+    cdef double x0, y0, z0, x1, y1, z1
+    cdef int64_t n1 = grid.shape[1], n2 = grid.shape[2]
+    cdef int64_t i0, i1, j0, j1, k0, k1, i, j, k
+    x0, y0, z0, x1, y1, z1 = piece_box(ax_, ay_, az_, bx_, by_, bz_, grow)
+    i0 = <int64_t>floor((x0 - grid.corner[0]) * ih)
+    i0 = i0 if i0 > 0 else 0
+    i1 = <int64_t>floor((x1 - grid.corner[0]) * ih)
+    i1 = grid.shape[0] - 1 if grid.shape[0] - 1 < i1 else i1
+    j0 = <int64_t>floor((y0 - grid.corner[1]) * ih)
+    j0 = j0 if j0 > 0 else 0
+    j1 = <int64_t>floor((y1 - grid.corner[1]) * ih)
+    j1 = n1 - 1 if n1 - 1 < j1 else j1
+    k0 = <int64_t>floor((z0 - grid.corner[2]) * ih)
+    k0 = k0 if k0 > 0 else 0
+    k1 = <int64_t>floor((z1 - grid.corner[2]) * ih)
+    k1 = n2 - 1 if n2 - 1 < k1 else k1
+    for i in range(i0, i1 + 1):
+        for j in range(j0, j1 + 1):
+            for k in range(k0, k1 + 1):
+                n = _cotree_cell(
+                    obj, grid, work, (i * n1 + j) * n2 + k, ax_, ay_, az_, bx_, by_, bz_, x0,
+                    y0, z0, x1, y1, z1, px, py, pz, qx, qy, qz, t1f, gscale, ferr, grow, ptol,
+                    n,
+                )
+                if n < 0:
+                    return -1
+    return n
+
+
+cdef inline int64_t cotree_seeds(
+    MeshTables hand_mesh, HandTables hand, SideTables obj, CellGrid object_grid,
+    const double[:, :] R, const double[:] t, const uint8_t[::1] near, double gscale,
+    double ferr, double hcell, Workspace work, int64_t n,
+) noexcept nogil:
+    """Candidate pairs of the hand's co-tree edges near the object's surface (runs ``near``,
+    see `near_runs`): each edge, moved into the object's frame by ``x -> R^T (x - t)`` and cut
+    into pieces of at most a cell along every axis (a long edge visits few cells, not its whole
+    box), against the object faces listed in the object-grid cells each piece's box touches
+    (`_cotree_piece`), giving the pair (the edge's first face, object face). Appended to
+    ``work.seeds`` from row ``n``; returns the new count, or -1 when the buffer is full.
+
+    ``ferr`` bounds how far a point moved back differs from where the pose's inverse puts it
+    (rounding and `frame_defect`): it widens the box and every plane tolerance. ``gscale``
+    bounds every coordinate, ``hcell`` is the hand grid's cell (the least plane tolerance is
+    the kernel's, `PLANE_TOL` of it)."""
+    cdef double h = object_grid.cell
+    cdef double ih = 1.0 / h, grow = GRID_MARGIN * h + ferr
+    cdef double ptol = PLANE_TOL * dmax(h, hcell) + 2.0 * ferr
+    cdef double a0, a1, a2, b0, b1, b2, px, py, pz, qx, qy, qz
+    cdef int64_t r, kk, top, e, u, v, t1f, pieces, w
+    for r in range(near.shape[0]):
+        if not near[r]:
+            continue
+        top = r * COTREE_CHUNK + COTREE_CHUNK
+        if hand.cotree.shape[0] < top:
+            top = hand.cotree.shape[0]
+        for kk in range(r * COTREE_CHUNK, top):
+            e = hand.cotree[kk]
+            u, v = hand_mesh.edges[e, 0], hand_mesh.edges[e, 1]
+            a0 = hand_mesh.vertices[u, 0] - t[0]
+            a1 = hand_mesh.vertices[u, 1] - t[1]
+            a2 = hand_mesh.vertices[u, 2] - t[2]
+            b0 = hand_mesh.vertices[v, 0] - t[0]
+            b1 = hand_mesh.vertices[v, 1] - t[1]
+            b2 = hand_mesh.vertices[v, 2] - t[2]
+            px = R[0, 0] * a0 + R[1, 0] * a1 + R[2, 0] * a2
+            py = R[0, 1] * a0 + R[1, 1] * a1 + R[2, 1] * a2
+            pz = R[0, 2] * a0 + R[1, 2] * a1 + R[2, 2] * a2
+            qx = R[0, 0] * b0 + R[1, 0] * b1 + R[2, 0] * b2
+            qy = R[0, 1] * b0 + R[1, 1] * b1 + R[2, 1] * b2
+            qz = R[0, 2] * b0 + R[1, 2] * b1 + R[2, 2] * b2
+            t1f = hand_mesh.edge_faces[e, 0]
+            pieces = <int64_t>(max3(fabs(qx - px), fabs(qy - py), fabs(qz - pz)) * ih)
+            if pieces < 1:
+                pieces = 1
+            for w in range(pieces):
+                n = _cotree_piece(
+                    obj, object_grid, work, <double>w / <double>pieces,
+                    <double>(w + 1) / <double>pieces, px, py, pz, qx, qy, qz, t1f, gscale,
+                    ferr, grow, ptol, n,
+                )
+                if n < 0:
+                    return -1
+    return n
