@@ -25,7 +25,6 @@ LAYERS = {
     "version": 0,
     "cache": 0,
     "datapath": 0,
-    "compiling": 0,
     "lazy": 0,
     "given": 0,
     "geometry": 1,

@@ -549,7 +549,7 @@ def test_fixes_are_spelled_as_flags_from_their_fields():
 # -- --help: fast, with an example --------------------------------------------------------------
 
 #: What ``--help`` must not load: the numerical and optional libraries behind the commands.
-HEAVY = ("numba", "trimesh", "scipy", "mujoco", "manifold3d", "matplotlib", "plotly", "dask",
+HEAVY = ("trimesh", "scipy", "mujoco", "manifold3d", "matplotlib", "plotly", "dask",
          "coal", "fcl", "pyarrow")  # fmt: skip
 COMMANDS = ("demo", "descriptor", "compare", "close", "inspect", "show", "overlap", "validate",
             "batch", "separate", "evaluate")  # fmt: skip

@@ -452,7 +452,7 @@ def test_real_spray_bottle_grasp_matches_plain_boolean():
 
 def test_ray_status_agrees_with_winding_number():
     """The exact point test used for shells with no classified vertex (`ray_status`)."""
-    from exactgrasp.backends.exact.classify import ray_status
+    from exactgrasp.backends.exact._stages import ray_status
     from exactgrasp.backends.exact.grids import build_grid
     from exactgrasp.geometry.winding import winding_number
 
@@ -481,7 +481,7 @@ def test_small_shell_inside_object_surface_cells_matches_plain_boolean():
     """A hand made of a large box and a tiny separate box just under the object's surface:
     every vertex of the tiny shell lies in a cell the object's surface touches, so its status
     comes from the exact point test, not from the grid."""
-    from exactgrasp.backends.exact.cells import point_status
+    from exactgrasp.backends.exact._stages import point_status
 
     big = box([0, 0, 0], [2, 2, 2])
     tiny = box([2.302, 0.905, 0.905], [2.312, 0.915, 0.915])
@@ -505,7 +505,7 @@ def test_small_shell_inside_object_surface_cells_matches_plain_boolean():
 
 def test_surfaces_cross_is_certain_and_keeps_culling_unchanged():
     """The kernel's cheap test that spares the BVH query: True only where surfaces cross."""
-    from exactgrasp.backends.exact.classify import surfaces_cross
+    from exactgrasp.backends.exact._entries import surfaces_cross
 
     links, objs = overlapping_hand()
     ex = ExactIntersector(links, objs, broadphase="coal")
@@ -625,7 +625,7 @@ def test_hand_parts_tables_are_consistent():
 def test_triangle_box_test_against_linear_programme():
     """`tri_box_xyz` (any half sizes) against an LP: does a point of the triangle lie in the
     box?"""
-    from exactgrasp.backends.exact.predicates import tri_box_xyz
+    from exactgrasp.backends.exact._stages import tri_box_xyz
 
     rng = np.random.default_rng(8)
     hits = 0

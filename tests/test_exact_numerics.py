@@ -172,16 +172,16 @@ def test_tiny_box_overlaps_match_exact_rationals():
 def test_crossed_edges_are_grouped_in_numpys_stable_order(n, high):
     # The crossed-edge sum groups records by edge with its own heap sort; ties must keep
     # record order, as numpy's stable sort does.
-    from exactgrasp.backends.exact.sums import _order_by_key
+    from exactgrasp.backends.exact._stages import order_by_key
 
     keys = np.random.default_rng(n + high).integers(0, high, n).astype(np.int64)
-    assert np.array_equal(_order_by_key(keys), np.argsort(keys, kind="stable"))
+    assert np.array_equal(order_by_key(keys), np.argsort(keys, kind="stable"))
 
 
 def test_hand_vertex_near_a_cell_boundary_is_unknown_when_the_inverse_errs_more():
     # Hand vertices reach the object's grid through R^T, which errs by R's departure from a
     # rotation: a vertex that close to a surface cell may truly lie in it.
-    from exactgrasp.backends.exact.classify import hand_statuses
+    from exactgrasp.backends.exact._stages import hand_statuses
     from exactgrasp.backends.exact.grids import build_grid
     from exactgrasp.backends.exact.tolerances import GRID_MARGIN
 

@@ -1,4 +1,5 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
+# cython: cdivision=True
 """The compiled kernels' tables, made from the named tuples of
 `exactgrasp.backends.exact.tables` (see ``_tables.pxd``)."""
 

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.backends import defaults
-from exactgrasp.backends.exact.classify import surfaces_cross
+from exactgrasp.backends.exact._entries import surfaces_cross
 from exactgrasp.backends.exact.tables import CellGrid, MeshTables
 from exactgrasp.geometry.winding import winding_number
 

@@ -28,15 +28,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from exactgrasp.backends.exact._entries import vertex_sums
 from exactgrasp.backends.exact.intersector import ExactIntersector
-from exactgrasp.compiling import kernel
 
 __all__ = [
     "VertexTables",
     "mesh_tables",
     "mesh_vertex_gradients",
     "vertex_gradients",
-    "vertex_sums",
     "vertex_tables",
 ]
 
@@ -137,38 +136,6 @@ def _part_sums(mom, weights, directions, targets):
     start = np.zeros(n_parts + 1, np.int64)
     np.cumsum(np.bincount(keys // n, minlength=n_parts), out=start[1:])
     return start, (keys % n).astype(np.int64), sums
-
-
-@kernel(nogil=True, error_model="numpy")
-def vertex_sums(begin, end, rows, values, tables, out_a, out_b):
-    """Each pose's moments (`moment_entries.MomentEntries`: ``begin``, ``end``, ``rows``,
-    ``values``; local coordinates, the object's in its own frame) summed onto the vertices,
-    added to ``out_a`` (k, n_a, 3) (the hand's rows) and ``out_b`` (k, n_b, 3) (the
-    object's). A row whose ``F`` is 0 is a face not met: skipped; a part's marker adds that
-    part's sums (`VertexTables.part_vectors`). Only the vertices of faces met are written:
-    fresh zeros (``numpy.zeros``) stay unmapped elsewhere."""
-    W, D, T = tables.weights, tables.directions, tables.targets
-    first_object, first_part = tables.object_from[0], tables.part_from[0]
-    ps, pt, pv = tables.part_start, tables.part_targets, tables.part_vectors
-    for i in range(begin.shape[0]):
-        for e in range(begin[i], end[i]):
-            r = rows[e]
-            if r >= first_part:
-                p = r - first_part
-                for q in range(ps[p], ps[p + 1]):
-                    for d in range(3):
-                        out_a[i, pt[q], d] += pv[q, d]
-                continue
-            if values[e, 0] == 0.0 and values[e, 1] == 0.0 and values[e, 2] == 0.0:
-                continue
-            out = out_b if r >= first_object else out_a
-            for j in range(3):
-                w = 0.0
-                for d in range(6):
-                    w += W[r, j, d] * values[e, d]
-                v = T[r, j]
-                for d in range(3):
-                    out[i, v, d] += w * D[r, d]
 
 
 def vertex_gradients(

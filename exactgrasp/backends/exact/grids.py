@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from exactgrasp.backends import defaults
-from exactgrasp.backends.exact.cells import raster_triangles
+from exactgrasp.backends.exact._entries import raster_triangles
 from exactgrasp.backends.exact.tables import (
     BOX_MAX,
     BOX_MIN,

@@ -55,7 +55,7 @@ from exactgrasp.backends.exact.intersection import POSE_SOURCES, Intersection
 from exactgrasp.backends.exact.moment_layout import empty_moment_tables, moment_layout
 from exactgrasp.backends.exact.moments import face_sources, original_ids, shift_moments
 from exactgrasp.backends.exact.options import ExactOptions, check_options
-from exactgrasp.backends.exact.pose import pose_volumes
+from exactgrasp.backends.exact._kernel import pose_volumes
 from exactgrasp.backends.exact.prepare import (
     bounds_centre,
     hand_tables,

@@ -1,0 +1,306 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
+# cython: cdivision=True, cpow=True
+"""The exact kernel, compiled: hand ∩ moved object for a batch of poses (`pose_volumes`), and
+the exact backend's other compiled entries.
+
+`pose_volumes` loops over the poses, each pose's stages (``_pose.pxd`` and the modules it
+cimports) running without the GIL; it holds the GIL only to grow a table a pose found too
+small and the moment entries' arrays. The tables are the named tuples of `tables`, read
+through the extension types of ``_tables.pxd``.
+"""
+
+import numpy as np
+
+from libc.stdint cimport int64_t
+
+from exactgrasp.backends.exact import tables as named
+from exactgrasp.backends.exact._constants cimport (
+    GROW,
+    LENGTH_FLOOR,
+    MOMENT_COLUMNS,
+    OK,
+    POINT_COLUMNS,
+    SEGMENT_COLUMNS,
+    STAT_CROSSING,
+    STAT_PAIRS,
+)
+from exactgrasp.backends.exact._classify cimport classify_vertices
+from exactgrasp.backends.exact._pose cimport (
+    cell_stats,
+    clear_records,
+    copy_rows,
+    move_object,
+    near_pass,
+    pose_moments,
+    vertex_bound,
+)
+from exactgrasp.backends.exact._search cimport trace_pairs
+from exactgrasp.backends.exact._seeds cimport cotree_seeds, object_edge_seeds
+from exactgrasp.backends.exact._sums cimport volume_sum
+from exactgrasp.backends.exact._tables cimport (
+    CellGrid,
+    HandTables,
+    MeshTables,
+    MomentRows,
+    MomentTables,
+    ObjectTables,
+    PoseScratch,
+    Workspace,
+)
+
+#: First size of the pair table (a power of two) and of the seed buffer; both double when a
+#: pose needs more (the pose is then computed again).
+PAIR_TABLE, SEED_ROWS = 2**14, 2**13
+#: Rows of moments a call's output holds at first, per pose (it grows when full).
+ROWS_PER_POSE = 64
+
+
+cdef class _Call:
+    """One call's tables (read through `_tables`), scratch, and counters."""
+
+    cdef MeshTables hand_mesh, object_mesh
+    cdef HandTables hand
+    cdef ObjectTables obj
+    cdef CellGrid hand_grid, object_grid
+    cdef MomentTables mom
+    cdef PoseScratch scratch
+    cdef MomentRows G
+    cdef object tuples
+    cdef int64_t cap, pairs, rows, attempt, token
+    cdef bint segs
+    cdef double tiny, amax, bmax, hcell
+    cdef double[:, ::1] R
+    cdef double[::1] t
+
+    def __init__(self, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap, mom):
+        self.tuples = (hand_mesh, hand, hand_grid, object_mesh, obj, object_grid)
+        self.hand_mesh, self.hand = MeshTables(hand_mesh), HandTables(hand)
+        self.object_mesh, self.obj = MeshTables(object_mesh), ObjectTables(obj)
+        self.hand_grid, self.object_grid = CellGrid(hand_grid), CellGrid(object_grid)
+        self.mom = MomentTables(mom)
+        self.tiny, self.cap = tiny, cap
+        self.pairs, self.rows = PAIR_TABLE, SEED_ROWS
+        self.segs = self.mom.row_count[0] > 0
+        self.attempt, self.token = 0, -1
+        self.hcell = self.hand_grid.cell
+        self.R, self.t = np.zeros((3, 3)), np.zeros(3)
+        n_rows = int(self.mom.row_count[0])
+        self.G = MomentRows(
+            named.MomentRows(
+                np.zeros((n_rows, MOMENT_COLUMNS)), np.full(n_rows, -1, np.int64),
+                np.zeros(n_rows + 1, np.int64), np.zeros(2, np.int64),
+            )
+        )
+        self.scratch = PoseScratch(_scratch(*self.tuples, cap, self.workspace()))
+        # Bounds on every vertex's length (hand; object in its frame): the error bounds'
+        # coordinate scale. The coordinates are local (about the hand's centre), so it
+        # measures the geometry's size, not its position.
+        self.amax = _first_max(vertex_bound(self.hand_mesh.vertices), LENGTH_FLOOR)
+        self.bmax = vertex_bound(self.object_mesh.vertices)
+
+    cdef Workspace workspace(self):
+        """The search's scratch arrays (`tables.Workspace`) at the current sizes."""
+        hand_mesh, hand, hand_grid, object_mesh, _, object_grid = self.tuples
+        cap, pairs = self.cap, self.pairs
+        acs, bcs = hand_grid.cell_start, object_grid.cell_start
+        longest = max(1, np.max(np.diff(acs)), np.max(np.diff(bcs)))
+        return Workspace(
+            named.Workspace(
+                np.zeros(hand_mesh.edges.shape[0], np.int64),
+                np.zeros(object_mesh.edges.shape[0], np.int64),
+                named.Crossings(np.empty(cap, np.int64), np.empty(cap), np.empty(cap)),
+                named.Crossings(np.empty(cap, np.int64), np.empty(cap), np.empty(cap)),
+                np.zeros(2, np.int64), np.zeros(pairs, np.int64), np.zeros(pairs, np.int32),
+                np.empty((self.rows, 2), np.int64), np.empty((2, POINT_COLUMNS)),
+                np.empty((2, 3), np.int64), np.empty((2, 4)), np.empty((3, 2), np.int64),
+                np.zeros(hand.parts.shape[0] - 1, np.bool_), np.empty(longest, np.int64),
+                np.empty((pairs if self.segs else 0, SEGMENT_COLUMNS)),
+            )
+        )
+
+
+def _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, work):
+    """The per-pose scratch arrays (`tables.PoseScratch`), ``cap`` crossings per mesh, around
+    the search's ``work`` (a compiled `Workspace`, which `PoseScratch` takes as it is)."""
+    na, nb = hand_mesh.vertices.shape[0], object_mesh.vertices.shape[0]
+    ma, mb = hand_mesh.faces.shape[0], object_mesh.faces.shape[0]
+    return named.PoseScratch(
+        np.empty_like(object_mesh.vertices), np.empty((mb, 3)), np.empty((mb, 3)),
+        np.empty(na, np.int8), np.empty(nb, np.int8), np.zeros(hand.parts.shape[0] - 1, np.bool_),
+        np.empty(max(na, nb), np.int64), np.empty(cap, np.int64), np.empty(3),
+        np.full(ma, -1, np.int64), np.full(mb, -1, np.int64),
+        np.zeros(obj.edge_runs.shape[0], np.bool_), np.zeros(hand.cotree_runs.shape[0], np.bool_),
+        np.zeros(hand.cotree_blocks.shape[0], np.bool_), np.zeros(0, np.bool_), work,
+    )
+
+
+cdef inline double _first_max(double a, double b) noexcept nogil:
+    """``max(a, b)`` as Python and numba evaluate it: ``a`` unless ``b`` is larger."""
+    return b if b > a else a
+
+
+cdef (double, double, int64_t, int64_t, int64_t) _search(_Call c, double gscale, double gb,
+                                                        double ferr):
+    """Stages "seeds" and "pairs" of the current pose: (segment sum, its error bound,
+    crossings, pairs evaluated, code). A pose whose pair table or seed buffer fills up is
+    searched again with both grown (the GIL is taken only for that)."""
+    cdef int64_t nseeds
+    cdef double seg = 0.0, segerr = 0.0
+    cdef int64_t ncross = 0, npairs = 0, code = OK
+    while True:
+        with nogil:
+            c.attempt += 1
+            if c.attempt >= 2**30:
+                # The pair table's tags would overflow: start them again.
+                c.scratch.work.pair_tags[:] = 0
+                c.attempt = 1
+            clear_records(c.scratch.work)
+            nseeds = object_edge_seeds(
+                c.object_mesh, c.obj, c.hand, c.hand_grid, c.scratch.object_V, c.scratch.near,
+                gscale, c.scratch.work, 0,
+            )
+            if nseeds >= 0:
+                nseeds = cotree_seeds(
+                    c.hand_mesh, c.hand, c.obj, c.object_grid, c.R, c.t, c.scratch.near_cotree,
+                    gscale, ferr, c.hcell, c.scratch.work, nseeds,
+                )
+            if nseeds >= 0:
+                seg, segerr, ncross, npairs, code = trace_pairs(
+                    c.hand_mesh, c.hand, c.object_mesh, c.obj, c.scratch.object_V,
+                    c.scratch.object_D, c.scratch.object_N, c.scratch.work, nseeds, gscale, gb,
+                    c.hcell, c.attempt,
+                )
+                if code != GROW:
+                    return seg, segerr, ncross, npairs, code
+        # A table was too small: the pose starts again with larger ones.
+        if nseeds < 0:
+            c.rows *= 2
+        else:
+            c.pairs *= 2
+        clear_records(c.scratch.work)
+        c.scratch.work = c.workspace()
+
+
+cdef class _Entries:
+    """The moment entries of a call: rows and values, grown as poses add to them."""
+
+    cdef int64_t[::1] rows
+    cdef double[:, ::1] values
+    cdef int64_t n
+
+    def __init__(self, int64_t first):
+        self.rows, self.values, self.n = np.empty(first, np.int64), np.empty((first, 6)), 0
+
+    cdef void add(self, MomentRows G, int64_t done, int64_t poses):
+        """The rows pose number ``done`` (from 1) touched, appended (`_pose.copy_rows`); when
+        full, new arrays long enough for all ``poses`` at 5/4 of the rate so far, and at least
+        twice as long."""
+        cdef int64_t count = G.state[0], size
+        if self.n + count > self.rows.shape[0]:
+            size = max(2 * self.rows.shape[0], (self.n + count) * poses * 5 // (4 * done) + count)
+            rows, values = np.empty(size, np.int64), np.empty((size, MOMENT_COLUMNS))
+            rows[: self.n] = self.rows[: self.n]
+            values[: self.n] = self.values[: self.n]
+            self.rows, self.values = rows, values
+        with nogil:
+            self.n = copy_rows(G, self.rows, self.values, self.n)
+
+
+def pose_volumes(
+    const double[:, :, ::1] poses, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid,
+    double tiny, int64_t cap, double[::1] out, double[::1] bounds, int64_t[::1] codes,
+    int64_t[:, ::1] stats, mom, int64_t[::1] moment_start,
+):
+    """Volume of hand ∩ (pose · object) for each pose; the hand is fixed, the object is in its
+    own frame. Arguments and results as the numba kernel's were (see ``docs/exact-backend.md``):
+
+    Parameters
+    ----------
+    poses : numpy.ndarray, shape (k, 4, 4)
+        Rigid motions of the object, in local coordinates.
+    hand_mesh, object_mesh : tables.MeshTables
+    hand : tables.HandTables
+    hand_grid, object_grid : tables.CellGrid
+    obj : tables.ObjectTables
+    tiny : float
+        Faces with ``|N|² <= tiny`` get ``D = 0``.
+    cap : int
+        Edge crossings recorded per mesh and pose before the pose gives up (`OVERFLOW`).
+    out, bounds : numpy.ndarray, shape (k,), float64
+        Filled with the volumes and their error bounds; left alone where the pose is not `OK`.
+    codes : numpy.ndarray, shape (k,), int64
+        `OK`, `DEGENERATE` or `OVERFLOW`.
+    stats : numpy.ndarray, shape (k, N_STATS), int64
+        Face pairs evaluated, crossing pairs, and the hand's parts classified vertex by vertex
+        / whole inside / whole outside (columns ``STAT_*``).
+    mom : tables.MomentTables
+        The hand's moment tables, or empty ones (volumes only: ``mom.row_count[0]`` is 0).
+    moment_start : numpy.ndarray, shape (k + 1,), int64
+        Filled with where each pose's moment entries start in the returned arrays.
+
+    Returns
+    -------
+    rows : numpy.ndarray, shape (t,), int64
+    values : numpy.ndarray, shape (t, 6), float64
+        The moment rows each `OK` pose with a non-zero volume touched, in the order first
+        touched, and their moments (local coordinates). Empty for volumes only.
+    """
+    cdef _Call c = _Call(
+        hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap, mom
+    )
+    cdef int64_t k = poses.shape[0]
+    cdef _Entries entries = _Entries(k * min(int(c.mom.row_count[0]), ROWS_PER_POSE))
+    cdef Py_ssize_t ip
+    moment_start[0] = 0
+    for ip in range(k):
+        _one_pose(c, poses, ip, out, bounds, codes, stats, entries)
+        moment_start[ip + 1] = entries.n
+    return np.asarray(entries.rows)[: entries.n], np.asarray(entries.values)[: entries.n]
+
+
+cdef void _one_pose(
+    _Call c, const double[:, :, ::1] poses, Py_ssize_t ip, double[::1] out,
+    double[::1] bounds, int64_t[::1] codes, int64_t[:, ::1] stats, _Entries entries,
+):
+    """Pose ``ip``: its volume, bound, code, statistics and, where asked, moments."""
+    cdef double gb, gscale, ferr, seg, segerr, bound, vol = 0.0
+    cdef int64_t ncross, npairs, code
+    cdef Py_ssize_t a, b
+    with nogil:
+        for a in range(3):
+            c.t[a] = poses[ip, a, 3]
+            for b in range(3):
+                c.R[a, b] = poses[ip, a, b]
+        gb = move_object(
+            c.R, c.t, c.object_mesh.vertices, c.object_mesh.faces, c.tiny, c.bmax,
+            c.scratch.object_V, c.scratch.object_D, c.scratch.object_N,
+        )
+        gscale = _first_max(c.amax, gb)
+        ferr = near_pass(
+            c.R, c.t, gscale, c.hand, c.hand_grid, c.obj, c.object_grid, c.scratch
+        )
+    seg, segerr, ncross, npairs, code = _search(c, gscale, gb, ferr)
+    with nogil:
+        # After the pairs: the parts whose own edges nothing crosses are classified whole.
+        code, c.token = classify_vertices(
+            c.R, c.t, c.hand_mesh, c.hand, c.object_mesh, c.obj, c.hand_grid, c.object_grid,
+            c.scratch, code, c.token, ferr,
+        )
+        if code == OK:
+            vol, bound, code = volume_sum(
+                c.hand_mesh, c.hand, c.object_mesh, c.obj, c.scratch, seg, segerr, gscale, gb
+            )
+            out[ip] = vol
+            bounds[ip] = bound
+            if code == OK and vol > 0.0 and c.segs:
+                c.G.state[1] = ip
+                pose_moments(
+                    c.R, c.t, c.hand_mesh, c.hand, c.object_mesh, c.mom, c.scratch, ncross,
+                    c.G,
+                )
+    if code == OK and vol > 0.0 and c.segs:
+        entries.add(c.G, ip + 1, poses.shape[0])
+    codes[ip] = code
+    stats[ip, STAT_PAIRS] = npairs
+    stats[ip, STAT_CROSSING] = ncross
+    cell_stats(stats, ip, c.hand.parts, c.scratch.uniform, c.scratch.hand_status)
