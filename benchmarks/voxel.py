@@ -98,14 +98,8 @@ def first_calls(path: Path, repeats: int) -> dict[str, float]:
 
 
 def kernel_kind() -> str:
-    """``"Cython"`` for the counting kernel compiled with the package, ``"numba <version>"``
-    for a numba one."""
-    from exactgrasp.backends.voxel import kernel
-
-    if hasattr(kernel.count_inside, "py_func"):
-        import numba
-
-        return f"numba {numba.__version__}"
+    """``"Cython"``: the counting kernel compiled with the package (recorded with the figures,
+    which numba kernels gave before)."""
     return "Cython"
 
 

@@ -100,9 +100,8 @@ def test_the_kernels_are_compiled_extensions_and_need_no_numba():
 def functions(text: str) -> list[tuple[str, int]]:
     """(name, lines) of every top-level function of a Cython source."""
     lines = text.splitlines()
-    starts = [
-        i for i, line in enumerate(lines) if re.match(r"(def|cdef|cpdef)\s(?!class\s)[^=]*?\w+\(", line)
-    ]
+    opening = re.compile(r"(def|cdef|cpdef)\s(?!class\s)[^=]*?\w+\(")
+    starts = [i for i, line in enumerate(lines) if opening.match(line)]
     found = []
     for i in starts:
         end = next(

@@ -34,6 +34,7 @@ import numpy as np
 from exactgrasp.backends import defaults
 from exactgrasp.backends.base import repeat_error, repeated_poses, resolve_jobs
 from exactgrasp.backends.exact import moment_entries as entries_of
+from exactgrasp.backends.exact._kernel import pose_volumes
 from exactgrasp.backends.exact.arranged import (
     arranged_moments,
     arranged_volume,
@@ -55,7 +56,6 @@ from exactgrasp.backends.exact.intersection import POSE_SOURCES, Intersection
 from exactgrasp.backends.exact.moment_layout import empty_moment_tables, moment_layout
 from exactgrasp.backends.exact.moments import face_sources, original_ids, shift_moments
 from exactgrasp.backends.exact.options import ExactOptions, check_options
-from exactgrasp.backends.exact._kernel import pose_volumes
 from exactgrasp.backends.exact.prepare import (
     bounds_centre,
     hand_tables,

@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from exactgrasp.backends.exact.grids import cell_reps, morton_order, part_order
 from exactgrasp.backends.exact._entries import face_terms
+from exactgrasp.backends.exact.grids import cell_reps, morton_order, part_order
 from exactgrasp.backends.exact.tables import (
     CHUNK,
     COTREE_BLOCK,
