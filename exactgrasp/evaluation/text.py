@@ -159,7 +159,7 @@ def _sampling(s: dict) -> list[str]:
     lines = [
         f"Distance {sm['distance']}. Seconds: the descriptor's own recorded computation time, "
         "mean per grasp, on two cores shared with other work. They are rough: a voxel row "
-        "includes whatever one-off cost (the hand's grid) fell to it, so the voxel "
+        "includes whatever one-off cost (compiling, the hand's grid) fell to it, so the voxel "
         "seconds do not grow smoothly with the paths; the exact backend's include about 2 s of "
         "preparation per grasp. The number of poses (paths x steps) is the clean measure of "
         "cost. Noise ratio: median between-grasp over median within-grasp distance at the two "
