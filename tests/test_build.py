@@ -1,9 +1,10 @@
 """The build: meson.build installs every file of the package, compiles every Cython kernel with
-the flags that keep numba's rounding, and the kernels' sources follow the house rules.
+the flags that round as the numba kernels they replaced did (no fused multiply-add, no
+fast-math), and the kernels' sources follow the house rules.
 
 The kernels themselves are checked against the numba kernels' results in
-``tests/test_kernel_goldens.py``; building and installing a wheel is described in
-``docs/building.md``.
+``tests/test_kernel_goldens.py`` and ``tests/test_exact_kernel_goldens.py``; building and
+installing a wheel is described in ``docs/building.md``.
 """
 
 from __future__ import annotations

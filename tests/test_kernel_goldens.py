@@ -114,7 +114,7 @@ def variants() -> list:
     found = [count_inside]
     try:
         from exactgrasp.backends.voxel import _kernel
-    except ImportError:  # the numba kernels: one variant
+    except ImportError:  # no compiled build here: the one variant `kernel` picked
         return found
     found.append(_kernel.count_inside)
     if _kernel.cpu_has_avx2():

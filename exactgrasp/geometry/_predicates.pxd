@@ -1,12 +1,13 @@
 # cython: language_level=3
-"""Filtered orientation predicates for the compiled kernels (Cython, inline): the arithmetic
-of `exactgrasp.geometry.predicates`, operation for operation.
+"""Filtered orientation predicates for the compiled kernels (Cython, inline): the crossings
+kernel (``_pair_tests.pxd``) and the exact backend's kernel (``backends/exact/_pairs.pxd``,
+``_classify.pxd``, ``_predicates.pxd``) cimport them.
 
 `orient_det` is the determinant of Shewchuk's orientation test evaluated in one fixed order,
 `orient_bound` its static error bound: a sign whose magnitude exceeds the bound is certain
-(`certain_sign`). The numba versions in `exactgrasp.geometry.predicates` serve the exact
-backend's kernels, which are numba still; both give the same bits (the kernels that use these
-are compared with their numba predecessors in ``tests/test_kernel_goldens.py``).
+(`certain_sign`). The arithmetic is the numba predicates' it replaced, operation for operation,
+so the kernels that use it give their predecessors' bits (``tests/test_kernel_goldens.py``,
+``tests/test_exact_kernel_goldens.py``).
 """
 
 from libc.math cimport fabs

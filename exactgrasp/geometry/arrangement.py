@@ -40,7 +40,7 @@ from exactgrasp.geometry.winding import winding_number
 __all__ = ["winding_layers"]
 
 # Relative size of an orientation determinant below which its sign is not trusted (the
-# static bound of `exactgrasp.geometry.predicates`, for coordinates spanning the pair).
+# static bound of ``geometry/_predicates.pxd``, for coordinates spanning the pair).
 _ORIENT_ERR = 1e-14
 
 

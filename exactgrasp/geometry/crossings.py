@@ -3,7 +3,7 @@
 Used by `exactgrasp.geometry.shells` to decide how shells relate. Triangle bounding boxes are
 binned on a uniform grid of about a triangle's size; each candidate pair gets an edge-triangle
 test whose orientation signs are certified by a static error bound (Shewchuk's, see
-`exactgrasp.geometry.predicates`): a sign inside the bound is *uncertain*. Within one shell
+``_predicates.pxd``): a sign inside the bound is *uncertain*. Within one shell
 certain crossings are reported (and, on request, uncertain contacts, neighbours that may fold
 onto each other included); between shells an uncertain contact is reported too.
 `find_contacts` reports every pair that may meet beyond its shared corners, for the exact cut.

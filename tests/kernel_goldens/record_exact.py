@@ -15,8 +15,8 @@ by 1e-3 and by 1e3 and moved far from the origin; a pose set with a crossing cap
 and against boxes on their special lines. The tables the kernel reads are built again from the
 scenes each time, so the check covers the compiled grid rasteriser and face terms too.
 
-`tests/test_kernel_goldens.py` checks that the compiled kernel gives the same results to the
-bit. Run this again only to add a case on purpose (the file then records the kernel of the day,
+`tests/test_exact_kernel_goldens.py` checks that the compiled kernel gives the same results to
+the bit. Run this again only to add a case on purpose (the file then records the kernel of the day,
 which the test can no longer compare with numba's).
 """
 

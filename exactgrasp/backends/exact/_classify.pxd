@@ -3,8 +3,8 @@
 either mesh against the other, from the grids' cell statuses, the crossings' parities along
 edges and, for a shell with no classified vertex, one exact point test.
 
-The arithmetic of `exactgrasp.backends.exact.classify`, operation for operation. See "Method",
-steps 1, 4 and 5, and "Culling rules" in ``docs/exact-backend.md``.
+The arithmetic of the numba stage it replaced, operation for operation. See "Method", steps
+1, 4 and 5, and "Culling rules" in ``docs/exact-backend.md``.
 """
 
 from libc.math cimport floor
@@ -149,12 +149,12 @@ cdef inline void hand_statuses(
 
 
 cdef inline double _fold_max(double acc, double v) noexcept nogil:
-    """One step of numba's ``max(...)``: ``v`` only where larger (the first largest wins)."""
+    """One step of ``max(...)`` as numba compiled it: ``v`` only where larger (first wins)."""
     return v if v > acc else acc
 
 
 cdef inline double _fold_min(double acc, double v) noexcept nogil:
-    """One step of numba's ``min(...)``: ``v`` only where it is smaller."""
+    """One step of ``min(...)`` as numba compiled it: ``v`` only where it is smaller."""
     return v if v < acc else acc
 
 
@@ -260,7 +260,7 @@ cdef inline bint _shell_straddles(
                         + R[2, k] * (V[i, 2] - t[2]))
             else:
                 x[k] = R[k, 0] * V[i, 0] + R[k, 1] * V[i, 1] + R[k, 2] * V[i, 2] + t[k]
-        # `cells.point_status`, on a point held in C.
+        # `_cells.point_status`, on a point held in C.
         c = cell_index(x[0], x[1], x[2], grid.corner[0], grid.corner[1], grid.corner[2],
                        1.0 / h, grid.shape[0], grid.shape[1], grid.shape[2])
         st = 0 if c < 0 else status[c]
@@ -365,7 +365,7 @@ cdef inline (int64_t, int64_t) classify_vertices(
     PoseScratch scratch, int64_t code, int64_t token, double ferr,
 ) noexcept nogil:
     """Stage "classify" of a pose (``docs/exact-backend.md``, "Method", steps 1, 4 and 5):
-    every vertex's status against the other mesh, after the search (`search.trace_pairs`) has
+    every vertex's status against the other mesh, after the search (`_search.trace_pairs`) has
     recorded the crossings.
 
     Object vertices (moved: ``scratch.object_V``) get their status in the hand's grid, hand

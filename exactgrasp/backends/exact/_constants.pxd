@@ -1,7 +1,8 @@
 # cython: language_level=3
 """The constants of `exactgrasp.backends.exact.tables` (integers) and
 `exactgrasp.backends.exact.tolerances` (floats) as the compiled kernels read them, written out
-from those modules (``tests/test_compiled_exact.py`` checks that they are equal, to the bit)."""
+from those modules (``tests/test_exact_kernel_goldens.py`` checks that they are equal, to the
+bit)."""
 
 cdef enum:
     OK = 0

@@ -1,8 +1,8 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 # cython: cdivision=True, cpow=True
 """The exact volume's derivatives by every vertex, summed from per-face moments, compiled
-(Cython, inline): the arithmetic of `exactgrasp.backends.exact.face_gradients.vertex_sums`,
-operation for operation.
+(Cython, inline), called through `_entries.vertex_sums`: the arithmetic of the numba
+`vertex_sums` it replaced, operation for operation.
 
 A vertex ``i`` moves each face ``f`` around it with velocity ``φ_i δ``, so
 ``dV/dx_i = Σ_f (∫_{f ∩ other} φ_i dA) n_f``; per face and corner ``∫ φ_j dA`` is a fixed

@@ -24,12 +24,12 @@ from exactgrasp.backends.exact._predicates cimport max3
 
 
 cdef inline double dmin(double a, double b) noexcept nogil:
-    """``min(a, b)`` as numba evaluates it: the first smallest argument."""
+    """``min(a, b)`` as numba evaluated it: the first smallest argument."""
     return b if b < a else a
 
 
 cdef inline double dmax(double a, double b) noexcept nogil:
-    """``max(a, b)`` as numba evaluates it: the first largest argument."""
+    """``max(a, b)`` as numba evaluated it: the first largest argument."""
     return b if b > a else a
 
 
@@ -69,7 +69,7 @@ cdef inline CrossingPoint _crossing_point(
         return False, 0.0, 0.0, 0.0, 0.0
     lam = dp / (dp - dq)
     dx, dy, dz = qx - px, qy - py, qz - pz
-    # The parameter errs by at most 4 eps / span (`pairs.param_err`), the point by that times
+    # The parameter errs by at most 4 eps / span (`_pairs.param_err`), the point by that times
     # the segment's extent plus rounding; the edge distances by about a plane distance's error.
     xerr = (4.0 * eps / span + 4.0 * U) * max3(fabs(dx), fabs(dy), fabs(dz)) + 6.0 * U * g
     return True, px + lam * dx, py + lam * dy, pz + lam * dz, 4.0 * eps + 2.0 * xerr + ptol
@@ -210,7 +210,7 @@ cdef inline int64_t piece_survivors(
     cdef bint apart
     for j in range(m):
         q = buf[j]
-        # Sums and differences of two float32 values stay float32 (as in numba).
+        # Sums and differences of two float32 values stay float32 (as numba kept them).
         hx = 0.5 * <float>(CBB[q, BOX_MAX] - CBB[q, BOX_MIN])
         hy = 0.5 * <float>(CBB[q, BOX_MAX + 1] - CBB[q, BOX_MIN + 1])
         hz = 0.5 * <float>(CBB[q, BOX_MAX + 2] - CBB[q, BOX_MIN + 2])

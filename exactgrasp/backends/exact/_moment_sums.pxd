@@ -2,7 +2,7 @@
 # cython: cdivision=True, cpow=True
 """The volume's derivatives in the kernel, compiled (Cython, inline): the moments
 ``(∫ n dA, ∫ x × n dA)`` of each link's boundary inside the moved object, summed from what
-the volume's pass leaves behind; the arithmetic of `exactgrasp.backends.exact.moment_sums`,
+the volume's pass leaves behind; the arithmetic of the numba stage it replaced,
 operation for operation.
 
 The hand's boundary inside the object is, face by face, a polygon bounded by pieces of the
@@ -11,10 +11,10 @@ a planar piece boundary with unit normal ``n``, per directed piece ``p → q``, 
 ``c = n · (p × q)``: ``∫ n dA += n c / 2`` and ``∫ x × n dA += ((p + q) × n) c / 6``. An
 edge's share inside is ``f`` times the whole edge's (tabled) plus ``(0, (h - f)(v - u) × F /
 3)``, ``f = Σ (b - a)`` and ``h = Σ (b² - a²)`` over its inside intervals ``[a, b]``, ``F``
-the whole edge's first three (see `moment_sums`).
+the whole edge's first three (see "Derivatives" in ``docs/exact-backend.md``).
 
 An edge crossed more than once has its records' parameters sorted by relinking their chain
-in the scratch ``chain`` (numba sorts a copy in an array it allocates): the same values in
+in the scratch ``chain`` (numba sorted a copy in an array it allocated): the same values in
 the same order, so the same sums.
 
 The directives above are this file's own: those of a ``.pyx`` that cimports it do not reach
@@ -181,7 +181,7 @@ cdef inline Chain _sort_chain(
 ) noexcept nogil:
     """The chain of records from ``head`` (linked through ``chain``, -1 ending it) relinked in
     increasing order of their parameters ``rec_l``; returns its new head and its length.
-    Insertion sort in the chain's order, as numba's `_sort_small` sorts the parameters copied
+    Insertion sort in the chain's order, as numba's `_sort_small` sorted the parameters copied
     in that order: the list is built largest first and scanned from there, as an array is
     scanned from its end, then reversed (the same order, ties and all)."""
     cdef int64_t k = head, top = -1, n = 0, nxt, prev, cur

@@ -3,7 +3,7 @@
 """The object's side of the volume's derivatives, compiled (Cython, inline): per object face,
 the moments ``(∫ n dA, ∫ x × n dA)`` of its part inside the hand, summed from what the
 volume's pass leaves behind, in the object's own frame (local coordinates, unmoved); the
-arithmetic of `exactgrasp.backends.exact.object_moments`, operation for operation.
+arithmetic of the numba stage it replaced, operation for operation.
 
 They are the same sums as the hand's (`_moment_sums`), made of the same pieces: an object
 face's boundary inside the hand runs along the pieces of its edges inside the hand and along

@@ -3,8 +3,8 @@
 with the exact test (certified orientation signs) and the pieces the common-line test shares
 with it.
 
-See "Method" steps 2-3 and "Why it is exact" in ``docs/exact-backend.md``; `sums` holds the
-terms' formulas. A triangle's corners travel as 9 doubles (a, b, c, each x, y, z), scalars:
+See "Method" steps 2-3 and "Why it is exact" in ``docs/exact-backend.md``; ``_sums.pxd`` holds
+the terms' formulas. A triangle's corners travel as 9 doubles (a, b, c, each x, y, z), scalars:
 no array views in the hot loop.
 """
 
@@ -31,12 +31,12 @@ from exactgrasp.geometry._predicates cimport orient, orient_bound
 
 
 cdef inline double max2(double a, double b) noexcept nogil:
-    """``max(a, b)`` as numba evaluates it: the first largest argument."""
+    """``max(a, b)`` as numba evaluated it: the first largest argument."""
     return b if b > a else a
 
 
 cdef inline double min2(double a, double b) noexcept nogil:
-    """``min(a, b)`` as numba evaluates it: the first smallest argument."""
+    """``min(a, b)`` as numba evaluated it: the first smallest argument."""
     return b if b < a else a
 
 

@@ -25,7 +25,7 @@ cdef inline int64_t sign(double x) noexcept nogil:
 
 
 cdef inline double min3(double a, double b, double c) noexcept nogil:
-    """``min(a, b, c)`` as numba evaluates it: the first smallest argument."""
+    """``min(a, b, c)`` as numba evaluated it: the first smallest argument."""
     cdef double m = a
     if b < m:
         m = b
@@ -35,7 +35,7 @@ cdef inline double min3(double a, double b, double c) noexcept nogil:
 
 
 cdef inline double max3(double a, double b, double c) noexcept nogil:
-    """``max(a, b, c)`` as numba evaluates it: the first largest argument."""
+    """``max(a, b, c)`` as numba evaluated it: the first largest argument."""
     cdef double m = a
     if b > m:
         m = b

@@ -5,7 +5,7 @@ the curves where the surfaces cross from the seeds' candidates, and their segmen
 See "Method", steps 2 and 3, and "Why it is exact" in ``docs/exact-backend.md``.
 `trace_pairs` runs in stages (`_object_face`, `_planes`, `_on_common_line`, `_line_segment`,
 `_exact_pair`, `_evaluate`, `_keep`) that share its state in one `Trace` record: inline
-stages cost no reference counts, unlike numba's calls.
+stages cost no reference counts (numba's calls between its functions did).
 """
 
 from libc.math cimport INFINITY, fabs, sqrt

@@ -1,6 +1,6 @@
 # cython: language_level=3
-"""Stage "seeds" of the exact kernel (Cython, inline): candidate face pairs from which `search`
-traces the curves where the two surfaces cross.
+"""Stage "seeds" of the exact kernel (Cython, inline): candidate face pairs from which
+`_search.trace_pairs` traces the curves where the two surfaces cross.
 
 Every such curve is closed. Either it crosses an edge of the object, or it lies in one object
 face; then it is a plane's section of the hand, visits each hand face once (a plane cuts a

@@ -1,18 +1,18 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 # cython: cdivision=True, cpow=True
 """The exact kernel's terms and sums, compiled (Cython, inline): face terms, edge weights, the
-edge sums and the pose's volume with its error bound; the arithmetic of
-`exactgrasp.backends.exact.sums`, operation for operation.
+edge sums and the pose's volume with its error bound; the arithmetic of the
+numba stage it replaced, operation for operation.
 
 The volume of ``A ∩ B`` for closed, outward-oriented triangle meshes is, by the divergence
 theorem with the field ``x / 3``, a sum of purely local terms (``D_t = d_t n_t``): per edge
 ``u → v`` of either mesh, owned by face ``t1`` and shared with ``t2``, ``W_e · f_e`` with
 ``W_e = (D_t1 − D_t2) · (u × v) / 6`` and ``f_e`` the fraction of the edge inside the other
-mesh; per pair of crossing faces a segment term (`search`). This module adds the edges' terms
+mesh; per pair of crossing faces a segment term (`_search.pxd`). This module adds the edges' terms
 up. See "Method" and "The volume's bound" in ``docs/exact-backend.md``.
 
 The edges crossed more than once are sorted in place in the records' scratch ``multi``
-(numba sorts a copy): the same order, so the same sums.
+(numba sorted a copy): the same order, so the same sums.
 
 The directives above are this file's own: those of a ``.pyx`` that cimports it do not reach
 its inline functions (bounds and division checks would stay).
@@ -47,7 +47,7 @@ ctypedef (double, double, int64_t) Volume
 
 
 cdef inline double _max(double a, double b) noexcept nogil:
-    """Python's ``max(a, b)`` as numba compiles it: ``b`` only where it is greater."""
+    """Python's ``max(a, b)`` as numba compiled it: ``b`` only where it is greater."""
     return b if b > a else a
 
 
@@ -186,7 +186,7 @@ cdef inline void _sift(
 
 cdef inline void _order_by_key(int64_t[::1] key, int64_t[::1] order, int64_t n) noexcept nogil:
     """Sort ``order[:n]`` (distinct indices into ``key``, int64) in place by (key, index): a
-    heap sort, numba's step for step where ``order`` starts increasing (numba sorts the
+    heap sort, numba's step for step where ``order`` starts increasing (numba sorted the
     positions ``0..n-1`` by (key of the index there, position): the same decisions)."""
     cdef int64_t start, end, tmp
     # Heapify, then move the largest to the end, n times.
@@ -208,7 +208,7 @@ cdef inline Sum _multi_sum(
     """The rest of `crossed_sum` (its sums so far ``total``, ``err``, ``run``): the edges
     crossed more than once, whose ``nm`` records ``multi`` lists in increasing order. The
     records are sorted in place by edge, then each edge's by parameter (insertion sort in
-    record order, as numba sorts a copy of the parameters: the same values in the same
+    record order, as numba sorted a copy of the parameters: the same values in the same
     order)."""
     cdef bint have = Wpre.shape[0] > 0, inside
     cdef int64_t i = 0, j, m, e, r

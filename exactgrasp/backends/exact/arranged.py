@@ -10,7 +10,7 @@ winding number 2 exactly where both solids are (each is a 2-manifold, winding nu
 and `exactgrasp.geometry.level_sets.level_set` gives that set's volume exactly from the
 surfaces' exact arrangement, with its boundary's triangles, whose moments
 (`arranged_moments`) give the volume's derivatives there as the kernel's would. The object
-is moved with the kernel's own arithmetic (`pose.move_object`), so the scene is the one the
+is moved with the kernel's own arithmetic (`_pose.move_object`), so the scene is the one the
 kernel read; the one rounding is the volume's, to the nearest float.
 
 That scene is the given one up to the rounding that took it into local coordinates and moved
@@ -38,7 +38,7 @@ __all__ = [
 
 
 def moved_like_the_kernel(vertices: np.ndarray, pose: np.ndarray) -> np.ndarray:
-    """``R x + t`` for each vertex, rounded as `pose.move_object` rounds it: each coordinate
+    """``R x + t`` for each vertex, rounded as `_pose.move_object` rounds it: each coordinate
     ``((r0 x + r1 y) + r2 z) + t``, one rounding per operation, no fused multiply-add.
 
     Parameters
@@ -108,7 +108,7 @@ def arranged_moments(
     rows: each link's boundary inside the object (the triangles on hand faces, by
     ``tables.face_link``) and, from row ``tables.object_from`` (where it is not -1), each
     object face's part inside the hand, in the object's own frame as the kernel's
-    (`object_moments`: the triangles moved back by the pose's inverse).
+    (``_object_moments.pxd``: the triangles moved back by the pose's inverse).
 
     Parameters
     ----------

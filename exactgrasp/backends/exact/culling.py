@@ -144,7 +144,7 @@ def crossing_poses(
     shells: tuple[tuple[np.ndarray, int], tuple[np.ndarray, int]],
 ) -> np.ndarray:
     """Which poses (k, 4, 4; local coordinates) certainly have crossing surfaces (the kernel's
-    cheap test, `classify.surfaces_cross`): the broad phase is never asked about them. Returns
+    cheap test, `_entries.surfaces_cross`): the broad phase is never asked about them. Returns
     a bool mask (k,)."""
     return surfaces_cross(
         poses, hand_mesh.vertices, *shells[0], hand_grid, object_mesh.vertices, *shells[1],

@@ -56,7 +56,7 @@ def grid_frame(V: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
 
 def vertex_cells(V: np.ndarray, cell: float) -> np.ndarray:
     """Flat index of the `build_grid` cell holding each vertex of V (n, 3): shape (n,), int64.
-    (`cells.cell_index` multiplies by 1 / cell instead, so a vertex within rounding of a cell
+    (`_cells.cell_index` multiplies by 1 / cell instead, so a vertex within rounding of a cell
     boundary may get the neighbouring cell there; both cells, grown by the grid's margin, hold
     it.)"""
     lo, n = grid_frame(V, cell)

@@ -6,14 +6,14 @@ The method (see ``docs/exact-backend.md``):
 1. Once per grasp, the hand links and the object bodies are each merged into one solid with a
    manifold3d ``Mesh64`` union (overlaps counted once), and a cell grid and the kernel's tables
    are built over each (`grids`, `prepare`), all in local coordinates.
-2. Per pose, the volume is a sum of local surface-integral terms (`pose.pose_volumes`): edges
+2. Per pose, the volume is a sum of local surface-integral terms (`_kernel.pose_volumes`): edges
    of either mesh lying inside the other, and pairs of crossing faces. Only faces near the
    other surface are ever tested; everything else is classified by its grid cell.
 3. Every geometric decision is an orientation sign with a certified error bound; a pose where
    any sign is uncertain (an exact coincidence of the surfaces) takes the volume's limit along
    a small translation from certified volumes nearby (`extrapolate`), or is refused.
 4. Where asked (`volume_moments`), the same pass also sums each link's surface moments, which
-   give the volume's derivatives (`moments`, `moment_layout`, `moment_sums`).
+   give the volume's derivatives (`moments`, `moment_layout`, ``_moment_sums.pxd``).
 
 Long because one class holds the build, the pose loop over threads and the fallback, for the
 volumes and their moments alike, and the intersector and its result (`Intersection`) document

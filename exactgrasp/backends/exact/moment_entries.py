@@ -1,7 +1,7 @@
 """The moments a call's poses touched, row by row: `MomentEntries`, and how the intersector
 puts the kernel's pieces of them together.
 
-The kernel (`pose.pose_volumes`) writes, per pose, only the rows of moments (a link's, or with
+The kernel (`_kernel.pose_volumes`) writes, per pose, only the rows of moments (a link's, or with
 ``faces`` a face's of either mesh) that the pose touched, never the ``L`` rows of every pose:
 for faces, a pose meets a few hundred of thousands. A pose's entries lie anywhere in the
 arrays, from ``begin`` to ``end``, so that poses run apart (threads, the volume's limit at an
@@ -49,7 +49,7 @@ class MomentEntries(NamedTuple):
 
 
 def from_kernel(start: np.ndarray, rows: np.ndarray, values: np.ndarray) -> MomentEntries:
-    """The entries of `pose.pose_volumes`: its ``moment_start`` (k + 1,), ``rows`` and
+    """The entries of `_kernel.pose_volumes`: its ``moment_start`` (k + 1,), ``rows`` and
     ``values``."""
     return MomentEntries(start[:-1], start[1:], rows, values)
 

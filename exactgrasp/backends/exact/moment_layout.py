@@ -1,8 +1,8 @@
 """The tables the volume's derivatives read in the kernel (`tables.MomentTables`), built once
 per intersector: which row each hand face adds to (its link, or with moments per face the face
-itself), the whole edges' shares, their sums per vertex and per part (`moment_sums` for what
-they are), and with moments per face the object's edges' shares in its own frame
-(`object_moments`) and one marker row per part.
+itself), the whole edges' shares, their sums per vertex and per part (``_moment_sums.pxd`` for
+what they are), and with moments per face the object's edges' shares in its own frame
+(``_object_moments.pxd``) and one marker row per part.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ def moment_tables(
     n_links : int
     object_mesh : tables.MeshTables, optional
         The object's mesh (local coordinates, unmoved): one row per object face after the
-        links' (`object_moments`); None for none.
+        links' (``_object_moments.pxd``); None for none.
     markers : bool
         One marker row per part after those (`tables.MomentTables.part_from`).
     """

@@ -15,7 +15,7 @@ with the twist ``ξ_l`` changes the volume at ``ξ_l · (F_l, M_l)``.
 
 `boolean_moments` computes these moments from one manifold3d boolean per pose, whose
 triangles remember the solid they come from; it is the reference of the kernel's moments
-(`pose.pose_volumes` with moments) and the fallback where the kernel hands a pose to the
+(`_kernel.pose_volumes` with moments) and the fallback where the kernel hands a pose to the
 boolean.
 """
 

@@ -154,7 +154,7 @@ def face_edge_terms(V: np.ndarray, F: np.ndarray, E: np.ndarray, ET: np.ndarray,
     E, ET : numpy.ndarray
         Its edges and their faces (`prepare_mesh`).
     tiny : float
-        Faces with ``|N|² <= tiny`` get ``D = 0`` (as `sums.face_terms`).
+        Faces with ``|N|² <= tiny`` get ``D = 0`` (as `_sums.face_terms`).
 
     Returns
     -------
@@ -179,7 +179,7 @@ def face_edge_terms(V: np.ndarray, F: np.ndarray, E: np.ndarray, ET: np.ndarray,
     norm = np.linalg.norm(AN, axis=1)
     unit = np.divide(AN, norm[:, None], out=np.zeros_like(AN), where=norm[:, None] > 0)
     l1l2, kappa = face_conditioning(V, F, AN)
-    # `search.plane_err_coef` for every face.
+    # `_search.plane_err_coef` for every face.
     coef = np.where(kappa <= KAPPA_MAX, PLANE_ERR * U * (1.0 + kappa), PLANE_ERR_NONE)
     g = max(float(np.sqrt((V**2).sum(1)).max()) * ROUNDING_PAD, LENGTH_FLOOR)
     dcost = face_d_coefs(l1l2, kappa) * g
@@ -259,7 +259,7 @@ def cotree_edges(mesh: MeshTables) -> np.ndarray:
 
     A closed curve on the mesh that visits each face at most once, moving from face to face
     across edges (a plane's section of the mesh inside one face of the other mesh), is a cycle
-    of the dual graph, so it crosses one of these edges (`seeds.cotree_seeds`). Shape (k,),
+    of the dual graph, so it crosses one of these edges (`_seeds.cotree_seeds`). Shape (k,),
     int64, edge indices."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import minimum_spanning_tree
@@ -289,7 +289,7 @@ def face_filters(V: np.ndarray, F: np.ndarray, N: np.ndarray, coef: np.ndarray) 
     normal), and its offset, all in single precision (`tolerances.FILTER_ERR` covers that); a
     point x of the face's plane lies in the face where every ``normal · x - offset >= 0``.
     Zeros for a face without a normal (such faces are never filtered out). ``coef`` (m,) is
-    each face's `search.plane_err_coef`, rounded up to single precision.
+    each face's `_search.plane_err_coef`, rounded up to single precision.
 
     Returns (filters (m, 16) float32, filter_err (m,) float32)."""
     out = np.zeros((len(F), FILTER_COLUMNS))
@@ -376,7 +376,7 @@ def object_tables(mesh: MeshTables) -> ObjectTables:
     # What each face's rounded D can cost (rigid motions keep it).
     BN = np.cross(BV[BF[:, 1]] - BV[BF[:, 0]], BV[BF[:, 2]] - BV[BF[:, 0]])
     l1l2, kappa = face_conditioning(BV, BF, BN)
-    # `search.plane_err_coef` for every face, as for the hand's.
+    # `_search.plane_err_coef` for every face, as for the hand's.
     coef = np.where(kappa <= KAPPA_MAX, PLANE_ERR * U * (1.0 + kappa), PLANE_ERR_NONE)
     order = morton_order(BV[BE].mean(1))
     filters, filter_err = face_filters(BV, BF, BN, coef)

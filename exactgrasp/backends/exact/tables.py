@@ -16,12 +16,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-#: Per-pose result codes (`pose.pose_volumes`): a certified volume, a pose culled whole (volume
+#: Per-pose result codes (`_kernel.pose_volumes`): a certified volume, a pose culled whole (volume
 #: exactly 0), an uncertain sign or an inconsistent sum, a full crossing buffer (the caller
 #: recomputes the last two with a boolean).
 OK, CULLED, DEGENERATE, OVERFLOW = 0, 1, 2, 3
 #: A per-pose scratch table was too small: the driver enlarges it and computes the pose again
-#: (never returned by `pose.pose_volumes`).
+#: (never returned by `_kernel.pose_volumes`).
 GROW = 4
 #: A volume the kernel read within its bound of zero, computed again in exact arithmetic
 #: (`arranged`; set by the intersector, never by the kernel).
@@ -31,7 +31,7 @@ ARRANGED = 5
 STAT_PAIRS, STAT_CROSSING, STAT_CELLS_TOUCHED, STAT_CELLS_INSIDE, STAT_CELLS_OUTSIDE = range(5)
 N_STATS = 5
 #: Seed edges are tested in runs of this many consecutive edges first, one bounding sphere per
-#: run (`ObjectTables.edge_runs`, `HandTables.cotree_runs`, `seeds.near_runs`).
+#: run (`ObjectTables.edge_runs`, `HandTables.cotree_runs`, `_seeds.near_runs`).
 CHUNK, COTREE_CHUNK = 16, 8
 #: The co-tree's runs are first tested in blocks of this many runs (`HandTables.cotree_blocks`).
 COTREE_BLOCK = 8
@@ -95,7 +95,7 @@ class CellGrid(NamedTuple):
     #: cell along a Morton curve of their clipped boxes' centres (`grids.list_groups`).
     cell_faces: np.ndarray
     #: ((shape + 1).prod(),) int64: summed-volume table of the surface cells, flat, so that a
-    #: box of cells' count takes 8 reads (`cells.surface_cells_in`).
+    #: box of cells' count takes 8 reads (`_cells.surface_cells_in`).
     surface_table: np.ndarray
     #: (listed, 6) float32 (`BOX_MIN`, `BOX_MAX`): the listed faces' bounding boxes, in the order
     #: of `cell_faces`, each clipped to its cell (grown by `GRID_MARGIN`, rounded outwards): a
@@ -117,7 +117,7 @@ class CellGrid(NamedTuple):
 
 #: Columns of a face's plane (`HandTables.planes`, the first `PLANE_COLUMNS` of
 #: `HandTables.face_records`): the unit normal (3) from `FACE_NORMAL`, the plane's offset
-#: ``n · a`` (`FACE_OFFSET`), `search.plane_err_coef` of its conditioning times the coordinate
+#: ``n · a`` (`FACE_OFFSET`), `_search.plane_err_coef` of its conditioning times the coordinate
 #: bound (`FACE_ERR_COEF`), what its rounded ``D`` can cost (`FACE_D_COST`, volume units).
 FACE_NORMAL, FACE_OFFSET, FACE_ERR_COEF, FACE_D_COST = 0, 3, 4, 5
 PLANE_COLUMNS = 6
@@ -164,7 +164,7 @@ class HandTables(NamedTuple):
     normals: np.ndarray
     #: (m, 6) float64: each face's bounding box (columns `BOX_MIN`, `BOX_MAX`).
     boxes: np.ndarray
-    #: (m, `PLANE_COLUMNS`) float64: unit normal (3), plane offset, `search.plane_err_coef` of
+    #: (m, `PLANE_COLUMNS`) float64: unit normal (3), plane offset, `_search.plane_err_coef` of
     #: its conditioning (times the coordinate bound: a plane distance's error), what its rounded
     #: ``D`` can cost (absolute, volume units); columns `FACE_NORMAL` to `FACE_D_COST`.
     planes: np.ndarray
@@ -198,10 +198,10 @@ class HandTables(NamedTuple):
     #: the unit normal of its edge k -> k + 1 in the face's plane, pointing into the face, and its
     #: offset (`prepare.face_filters`): what the seeds' filters read, one cache line per face.
     filters: np.ndarray
-    #: (m,) float32: `search.plane_err_coef` of each face (rounded up).
+    #: (m,) float32: `_search.plane_err_coef` of each face (rounded up).
     filter_err: np.ndarray
     #: (m, `FACE_RECORD_COLUMNS`) float64: per face, what the pair evaluation reads
-    #: (`search.trace_pairs`) in three cache lines: `planes` (6), its corners' coordinates (9),
+    #: (`_search.trace_pairs`) in three cache lines: `planes` (6), its corners' coordinates (9),
     #: ``D`` (3), the index of the link it comes from (`MomentTables.face_link`, set with them),
     #: five zeros.
     face_records: np.ndarray
@@ -225,7 +225,7 @@ class ObjectTables(NamedTuple):
     #: (m, 16) float32: the faces' planes and edge normals in the object's frame (as
     #: `HandTables.filters`).
     filters: np.ndarray
-    #: (m,) float32: `search.plane_err_coef` of each face (rounded up).
+    #: (m,) float32: `_search.plane_err_coef` of each face (rounded up).
     filter_err: np.ndarray
     #: (m,) float64: what each face's rounded ``D`` can cost its terms, over the coordinate
     #: bound (`prepare.face_d_coefs`; rigid motions keep it).
@@ -237,7 +237,7 @@ class ObjectTables(NamedTuple):
     #: (n,) int64: end of each vertex's adjacency (no entries go to another part).
     adj_split: np.ndarray
     #: (0, 2) float64: empty; the object's edge weights change with the pose and are computed
-    #: per pose (`sums.edge_weight`).
+    #: per pose (`_sums.edge_weight`).
     edge_weights: np.ndarray
     #: (0,) int64: empty: the object's edges are not split by part.
     edge_part: np.ndarray
@@ -284,7 +284,7 @@ class MomentTables(NamedTuple):
     #: part's vertices to higher-numbered ones.
     part_moments: np.ndarray
     #: (1,) int64: the row from which the moments hold one row per object face (the object's
-    #: boundary inside the hand, face by face, `object_moments`), or -1: none.
+    #: boundary inside the hand, face by face, ``_object_moments.pxd``), or -1: none.
     object_from: np.ndarray
     #: (1,) int64: the rows of a pose's `MomentRows`: the moments' ``L`` (links, or faces of
     #: both meshes), then with `part_from` one marker per part; 0: none (volumes only).
@@ -305,7 +305,7 @@ class MomentTables(NamedTuple):
 
 
 class MomentRows(NamedTuple):
-    """One pose's moments as the kernel adds them up (`pose.pose_moments`), with the rows
+    """One pose's moments as the kernel adds them up (`_pose.pose_moments`), with the rows
     the pose touched: only those are read out and cleared, not all ``L``."""
 
     #: (L, `MOMENT_COLUMNS`) float64: the moments; zero outside the rows touched.
@@ -313,7 +313,7 @@ class MomentRows(NamedTuple):
     #: (L,) int64: the pose that last touched each row (-1: none).
     stamp: np.ndarray
     #: (L + 1,) int64: the rows this pose touched, in the order first touched (one spare
-    #: entry: `moment_sums.touch` writes before it knows).
+    #: entry: `_moment_sums.touch` writes before it knows).
     touched: np.ndarray
     #: (2,) int64: how many rows this pose touched, and the pose (what `stamp` holds).
     state: np.ndarray
@@ -363,7 +363,7 @@ class Workspace(NamedTuple):
     #: (2,) int64: records so far in `hand_rec` and `object_rec`.
     nrec: np.ndarray
     #: (size,) int64: the face pairs evaluated in this pose, an open-addressing hash table
-    #: (`search.trace_pairs`) of keys ``t * (object m) + s``; ``size`` is a power of two.
+    #: (`_search.trace_pairs`) of keys ``t * (object m) + s``; ``size`` is a power of two.
     pair_keys: np.ndarray
     #: (size,) int32: per slot twice the token of the call that filled it, plus 1 where that
     #: pair crosses (slots of other calls are empty).
@@ -388,12 +388,13 @@ class Workspace(NamedTuple):
     #: (pair table size, `SEGMENT_COLUMNS`) float64, or (0, `SEGMENT_COLUMNS`) for volumes only:
     #: per crossing pair of the pose, in the order traced, its hand face, its segment's ends p, q
     #: (directed along ``n_t × n_s``), the hand face's unit normal and link, and the object face:
-    #: what the volume's derivatives integrate over (`moment_sums`, `object_moments`).
+    #: what the volume's derivatives integrate over (``_moment_sums.pxd``,
+    #: ``_object_moments.pxd``).
     segments: np.ndarray
 
 
 class PoseScratch(NamedTuple):
-    """Per-pose arrays of `pose.pose_volumes`, reused from pose to pose."""
+    """Per-pose arrays of `_kernel.pose_volumes`, reused from pose to pose."""
 
     #: (object n, 3) float64: the moved object's vertices.
     object_V: np.ndarray
@@ -410,7 +411,7 @@ class PoseScratch(NamedTuple):
     uniform: np.ndarray
     #: (max(hand n, object n),) int64: the breadth-first queue of the status walks.
     queue: np.ndarray
-    #: (capacity,) int64: the records of edges crossed more than once (`sums.crossed_sum`).
+    #: (capacity,) int64: the records of edges crossed more than once (`_sums.crossed_sum`).
     multi: np.ndarray
     #: (3,) float64: a hand vertex in the object's frame, for a point test.
     point: np.ndarray
@@ -424,7 +425,7 @@ class PoseScratch(NamedTuple):
     near_cotree: np.ndarray
     #: (cotree blocks,) bool: the blocks of those runs that may come near it.
     near_block: np.ndarray
-    #: (0,) bool: empty (no parent level for `seeds.near_runs`).
+    #: (0,) bool: empty (no parent level for `_seeds.near_runs`).
     none: np.ndarray
     #: The search's and pair tests' scratch.
     work: Workspace

@@ -44,7 +44,7 @@ NORMAL_FLOOR = 1e-12
 
 #: The seeds' filters read faces' planes and edge normals rounded to single precision: a distance
 #: with them errs by at most ``2**-24 (|n|_1 |x|_inf + |offset|) + 8 U G <= 2**-22 G`` more
-#: (`seeds`; their tolerances add it, times the coordinate bound G).
+#: (``_seeds.pxd``; their tolerances add it, times the coordinate bound G).
 FILTER_ERR = 2.0**-22
 
 #: A plane distance ``n·x - n·a`` with the unit normal of a face from its cross product errs by

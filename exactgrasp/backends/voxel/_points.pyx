@@ -26,7 +26,7 @@ cdef struct Cells:
 
 
 cdef double _column_min(const double[:, :] P, Py_ssize_t d) noexcept nogil:
-    """numpy's ``P[:, d].min()`` as numba computes it: the first of the least, a NaN first."""
+    """numpy's ``P[:, d].min()`` as numba computed it: the first of the least, a NaN first."""
     cdef double least = P[0, d], v
     cdef Py_ssize_t p
     if isnan(least):
@@ -41,7 +41,7 @@ cdef double _column_min(const double[:, :] P, Py_ssize_t d) noexcept nogil:
 
 
 cdef double _column_max(const double[:, :] P, Py_ssize_t d) noexcept nogil:
-    """numpy's ``P[:, d].max()`` as numba computes it: the first of the greatest."""
+    """numpy's ``P[:, d].max()`` as numba computed it: the first of the greatest."""
     cdef double most = P[0, d], v
     cdef Py_ssize_t p
     if isnan(most):
