@@ -82,20 +82,29 @@ def test_versions_and_build_backend_agree():
 
 
 def test_the_kernels_are_compiled_extensions_and_need_no_numba():
+    # Every backend's kernels, the exact one's included, run with numba absent: an exact
+    # volume, a voxel grid and a crossing scan in a process that never imports it.
     code = (
         "import sys\n"
+        "import numpy as np\n"
+        "import exactgrasp as eg\n"
         "from exactgrasp.geometry import crossings, winding\n"
-        "from exactgrasp.backends.voxel import kernel, points, grids\n"
+        "from exactgrasp.backends.exact import intersector\n"
         "import exactgrasp.geometry._winding as w, exactgrasp.backends.voxel._kernel as k\n"
-        "import exactgrasp.geometry._crossings as c\n"
-        "print(w.__file__, k.__file__, c.__file__, type(winding.winding_number).__name__)\n"
-        "print(type(crossings.pair_scan).__name__, 'numba' in sys.modules)\n"
+        "import exactgrasp.geometry._crossings as c, exactgrasp.backends.exact._kernel as x\n"
+        "from exactgrasp.geometry.primitives import box\n"
+        "cube = box([0.5, 0.5, 0.5])\n"
+        "volume = eg.intersection_volume(cube, cube, np.eye(4))\n"
+        "print(w.__file__, k.__file__, c.__file__, x.__file__)\n"
+        "print(type(winding.winding_number).__name__, type(crossings.pair_scan).__name__)\n"
+        "print(type(intersector.pose_volumes).__name__, volume, 'numba' in sys.modules)\n"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT
     ).stdout.split()
-    assert all(path.endswith((".so", ".pyd")) for path in out[:3]), out
-    assert out[3] == out[4] == "cython_function_or_method" and out[5] == "False"
+    assert all(path.endswith((".so", ".pyd")) for path in out[:4]), out
+    assert out[4] == out[5] == out[6] == "cython_function_or_method", out
+    assert abs(float(out[7]) - 1.0) < 1e-12 and out[8] == "False", out
 
 
 def functions(text: str) -> list[tuple[str, int]]:
