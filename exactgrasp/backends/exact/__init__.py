@@ -5,12 +5,13 @@ array-level core; its result in `intersection`, its fallbacks in `extrapolate` a
 `arranged`), `backend` (the `Backend`), `tables` (the kernel's named tables), `grids` and
 `prepare` (built once per grasp), the compiled kernel `_kernel` (the per-pose driver; its
 stages, inline, in ``_pose.pxd``, ``_seeds.pxd`` with ``_edge_seeds.pxd`` and ``_filters.pxd``,
-``_search.pxd``, ``_pairs.pxd``, ``_classify.pxd`` and ``_sums.pxd``, on ``_cells.pxd`` and
-``_predicates.pxd``, its tables read through ``_tables.pxd``) and `_entries` (the compiled
-kernels Python calls outside it); every tolerance in `tolerances`; the volume's derivatives in
-`moments` (what they are, the boolean reference), `moment_layout` (the tables, built once),
-``_moment_sums.pxd`` and ``_object_moments.pxd`` (in the kernel), `moment_entries` (the rows
-each pose touched) and `gradients` (`VolumeGradients`) or `face_gradients` (by every vertex).
+``_search.pxd`` with ``_common_line.pxd``, ``_pairs.pxd``, ``_classify.pxd`` and
+``_sums.pxd``, on ``_cells.pxd`` and ``_predicates.pxd``, its tables read through
+``_tables.pxd``) and `_entries` (the compiled kernels Python calls outside it); every tolerance
+in `tolerances`; the volume's derivatives in `moments` (what they are, the boolean
+reference), `moment_layout` (the tables, built once), ``_moment_sums.pxd`` and
+``_object_moments.pxd`` (in the kernel), `moment_entries` (the rows each pose touched) and
+`gradients` (`VolumeGradients`) or `face_gradients` (by every vertex).
 """
 
 from __future__ import annotations
