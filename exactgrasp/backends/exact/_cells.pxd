@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Cell-grid kernels of the exact backend (Cython, inline): which cell holds a point, which
 cells a triangle touches, how many surface cells a box of cells holds.
 

@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Stage "seeds" of the exact kernel, its first search (Cython, inline): the object's edges
 near the hand's surface, each walking the hand-grid cells it passes, against the hand faces
 listed there (`object_edge_seeds`, in the hand's frame). The pairs go to the seed buffer

@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """The seeds' filters (Cython, inline): the tests `_seeds` runs on what a grid cell holds and
 on each listed face, before a candidate pair is kept.
 

@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Stage "seeds" of the exact kernel (Cython, inline): candidate face pairs from which
 `_search.trace_pairs` traces the curves where the two surfaces cross.
 
