@@ -12,7 +12,7 @@ from libc.stdint cimport int64_t, uint8_t
 from exactgrasp.backends.exact._cells cimport surface_cells_in
 from exactgrasp.backends.exact._constants cimport CHUNK, FILTER_ERR, GRID_MARGIN, PLANE_TOL
 from exactgrasp.backends.exact._filters cimport (
-    cell_row, cell_survivors, dmax, dmin, filter_row, may_cross, piece_box, piece_meets_cell,
+    cell_row, cell_survivors, dmax, dmin, may_cross, piece_box, piece_meets_cell,
     piece_survivors,
 )
 from exactgrasp.backends.exact._tables cimport (
@@ -97,6 +97,11 @@ cdef inline int64_t _piece_seeds(
     when the buffer is full."""
     cdef double x0, y0, z0, x1, y1, z1, eps
     cdef int64_t m, kept, j, ft
+    cdef const int64_t *faces = &grid.cell_faces[0]
+    cdef const int64_t *survivors = &work.survivors[0]
+    cdef const float *filter_err = &hand.filter_err[0]
+    cdef const float *filters = &hand.filters[0, 0]
+    cdef int64_t columns = hand.filters.shape[1]
     x0, y0, z0, x1, y1, z1 = piece_box(ax_, ay_, az_, bx_, by_, bz_, margin)
     if not piece_meets_cell(
         cell_row(grid.bounds, c), ax_, ay_, az_, bx_, by_, bz_, x0, y0, z0, x1, y1, z1, margin
@@ -108,11 +113,11 @@ cdef inline int64_t _piece_seeds(
     )
     kept = piece_survivors(grid.boxes, work.survivors, m, ax_, ay_, az_, bx_, by_, bz_, margin)
     for j in range(kept):
-        ft = grid.cell_faces[work.survivors[j]]
+        ft = faces[survivors[j]]
         # Both ends beyond the tolerance on one side: no crossing. Else the crossing point
         # must not lie beyond it outside an edge of the face.
-        eps = (hand.filter_err[ft] + FILTER_ERR) * gscale
-        if not may_cross(filter_row(hand.filters, ft), px, py, pz, qx, qy, qz, eps, ptol, gscale):
+        eps = (filter_err[ft] + FILTER_ERR) * gscale
+        if not may_cross(filters + ft * columns, px, py, pz, qx, qy, qz, eps, ptol, gscale):
             continue
         n = _append_seed(work.seeds, n, ft, s1)
         if n < 0:

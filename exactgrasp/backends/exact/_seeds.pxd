@@ -30,7 +30,7 @@ from exactgrasp.backends.exact._constants cimport (
 )
 from exactgrasp.backends.exact._edge_seeds cimport _append_seed, object_edge_seeds
 from exactgrasp.backends.exact._filters cimport (
-    cell_row, cell_survivors, dmax, filter_row, may_cross, piece_box, piece_meets_cell,
+    cell_row, cell_survivors, dmax, may_cross, piece_box, piece_meets_cell,
     sphere_meets_cell,
 )
 from exactgrasp.backends.exact._predicates cimport max3
@@ -160,6 +160,11 @@ cdef inline int64_t _cotree_cell(
     count, or -1 when the buffer is full."""
     cdef int64_t m, jj, s
     cdef double eps
+    cdef const int64_t *faces = &grid.cell_faces[0]
+    cdef const int64_t *survivors = &work.survivors[0]
+    cdef const float *filter_err = &obj.filter_err[0]
+    cdef const float *filters = &obj.filters[0, 0]
+    cdef int64_t columns = obj.filters.shape[1]
     if grid.cell_start[c + 1] == grid.cell_start[c]:
         return n
     if not piece_meets_cell(
@@ -171,9 +176,9 @@ cdef inline int64_t _cotree_cell(
         work.survivors,
     )
     for jj in range(m):
-        s = grid.cell_faces[work.survivors[jj]]
-        eps = (obj.filter_err[s] + FILTER_ERR) * gscale + ferr
-        if not may_cross(filter_row(obj.filters, s), px, py, pz, qx, qy, qz, eps, ptol, gscale):
+        s = faces[survivors[jj]]
+        eps = (filter_err[s] + FILTER_ERR) * gscale + ferr
+        if not may_cross(filters + s * columns, px, py, pz, qx, qy, qz, eps, ptol, gscale):
             continue
         n = _append_seed(work.seeds, n, t1f, s)
         if n < 0:
@@ -241,29 +246,39 @@ cdef inline int64_t cotree_seeds(
     cdef double ih = 1.0 / h, grow = GRID_MARGIN * h + ferr
     cdef double ptol = PLANE_TOL * dmax(h, hcell) + 2.0 * ferr
     cdef double a0, a1, a2, b0, b1, b2, px, py, pz, qx, qy, qz
+    # The pose and the tables' rows read once, not per edge (stores to the seed buffer could
+    # alias them for the compiler).
+    cdef double r00 = R[0, 0], r01 = R[0, 1], r02 = R[0, 2], r10 = R[1, 0], r11 = R[1, 1]
+    cdef double r12 = R[1, 2], r20 = R[2, 0], r21 = R[2, 1], r22 = R[2, 2]
+    cdef double t0 = t[0], t1 = t[1], t2 = t[2]
+    cdef const double *V = &hand_mesh.vertices[0, 0]
+    cdef const int64_t *E = &hand_mesh.edges[0, 0]
+    cdef const int64_t *EF = &hand_mesh.edge_faces[0, 0]
+    cdef const int64_t *cotree = &hand.cotree[0]
+    cdef int64_t ncotree = hand.cotree.shape[0], efs = hand_mesh.edge_faces.shape[1]
     cdef int64_t r, kk, top, e, u, v, t1f, pieces, w
     for r in range(near.shape[0]):
         if not near[r]:
             continue
         top = r * COTREE_CHUNK + COTREE_CHUNK
-        if hand.cotree.shape[0] < top:
-            top = hand.cotree.shape[0]
+        if ncotree < top:
+            top = ncotree
         for kk in range(r * COTREE_CHUNK, top):
-            e = hand.cotree[kk]
-            u, v = hand_mesh.edges[e, 0], hand_mesh.edges[e, 1]
-            a0 = hand_mesh.vertices[u, 0] - t[0]
-            a1 = hand_mesh.vertices[u, 1] - t[1]
-            a2 = hand_mesh.vertices[u, 2] - t[2]
-            b0 = hand_mesh.vertices[v, 0] - t[0]
-            b1 = hand_mesh.vertices[v, 1] - t[1]
-            b2 = hand_mesh.vertices[v, 2] - t[2]
-            px = R[0, 0] * a0 + R[1, 0] * a1 + R[2, 0] * a2
-            py = R[0, 1] * a0 + R[1, 1] * a1 + R[2, 1] * a2
-            pz = R[0, 2] * a0 + R[1, 2] * a1 + R[2, 2] * a2
-            qx = R[0, 0] * b0 + R[1, 0] * b1 + R[2, 0] * b2
-            qy = R[0, 1] * b0 + R[1, 1] * b1 + R[2, 1] * b2
-            qz = R[0, 2] * b0 + R[1, 2] * b1 + R[2, 2] * b2
-            t1f = hand_mesh.edge_faces[e, 0]
+            e = cotree[kk]
+            u, v = E[2 * e], E[2 * e + 1]
+            a0 = V[3 * u] - t0
+            a1 = V[3 * u + 1] - t1
+            a2 = V[3 * u + 2] - t2
+            b0 = V[3 * v] - t0
+            b1 = V[3 * v + 1] - t1
+            b2 = V[3 * v + 2] - t2
+            px = r00 * a0 + r10 * a1 + r20 * a2
+            py = r01 * a0 + r11 * a1 + r21 * a2
+            pz = r02 * a0 + r12 * a1 + r22 * a2
+            qx = r00 * b0 + r10 * b1 + r20 * b2
+            qy = r01 * b0 + r11 * b1 + r21 * b2
+            qz = r02 * b0 + r12 * b1 + r22 * b2
+            t1f = EF[efs * e]
             pieces = <int64_t>(max3(fabs(qx - px), fabs(qy - py), fabs(qz - pz)) * ih)
             if pieces < 1:
                 pieces = 1
