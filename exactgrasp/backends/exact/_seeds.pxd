@@ -256,6 +256,7 @@ cdef inline int64_t cotree_seeds(
     cdef const int64_t *EF = &hand_mesh.edge_faces[0, 0]
     cdef const int64_t *cotree = &hand.cotree[0]
     cdef int64_t ncotree = hand.cotree.shape[0], efs = hand_mesh.edge_faces.shape[1]
+    cdef int64_t vw = hand_mesh.vertices.shape[1], ew = hand_mesh.edges.shape[1]
     cdef int64_t r, kk, top, e, u, v, t1f, pieces, w
     for r in range(near.shape[0]):
         if not near[r]:
@@ -265,13 +266,13 @@ cdef inline int64_t cotree_seeds(
             top = ncotree
         for kk in range(r * COTREE_CHUNK, top):
             e = cotree[kk]
-            u, v = E[2 * e], E[2 * e + 1]
-            a0 = V[3 * u] - t0
-            a1 = V[3 * u + 1] - t1
-            a2 = V[3 * u + 2] - t2
-            b0 = V[3 * v] - t0
-            b1 = V[3 * v + 1] - t1
-            b2 = V[3 * v + 2] - t2
+            u, v = E[ew * e], E[ew * e + 1]
+            a0 = V[vw * u] - t0
+            a1 = V[vw * u + 1] - t1
+            a2 = V[vw * u + 2] - t2
+            b0 = V[vw * v] - t0
+            b1 = V[vw * v + 1] - t1
+            b2 = V[vw * v + 2] - t2
             px = r00 * a0 + r10 * a1 + r20 * a2
             py = r01 * a0 + r11 * a1 + r21 * a2
             pz = r02 * a0 + r12 * a1 + r22 * a2
