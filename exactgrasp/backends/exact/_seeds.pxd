@@ -24,7 +24,7 @@ this module).
 from libc.math cimport fabs, floor
 from libc.stdint cimport int64_t, uint8_t
 
-from exactgrasp.backends.exact._cells cimport surface_cells_in
+from exactgrasp.backends.exact._cells cimport surface_cells_box
 from exactgrasp.backends.exact._constants cimport (
     COTREE_CHUNK, FILTER_ERR, GRID_MARGIN, PLANE_TOL, SPHERE_CENTRE, SPHERE_RADIUS,
 )
@@ -56,35 +56,37 @@ cdef inline double frame_defect(const double[:, :] R) noexcept nogil:
 
 
 cdef inline bint _scan_cells(
-    CellGrid grid, const int64_t[:, ::1] rng, double m0, double m1, double m2, double r,
-    double margin,
+    CellGrid grid, const int64_t *lo, const int64_t *hi, double m0, double m1, double m2,
+    double r, double margin,
 ) noexcept nogil:
     """Whether the sphere of centre (m0, m1, m2) and radius r may meet what one of the surface
-    cells of the box of cells ``rng`` (3, 2) holds (`sphere_meets_cell`)."""
+    cells of the box of cells [lo, hi] (3 inclusive index ranges) holds (`sphere_meets_cell`)."""
     cdef int64_t n1 = grid.shape[1], n2 = grid.shape[2]
+    cdef const int64_t *start = &grid.cell_start[0]
     cdef int64_t i, j, kk, c
     cdef bint ok = False
-    for i in range(rng[0, 0], rng[0, 1] + 1):
-        for j in range(rng[1, 0], rng[1, 1] + 1):
-            for kk in range(rng[2, 0], rng[2, 1] + 1):
+    for i in range(lo[0], hi[0] + 1):
+        for j in range(lo[1], hi[1] + 1):
+            for kk in range(lo[2], hi[2] + 1):
                 c = (i * n1 + j) * n2 + kk
-                if grid.cell_start[c + 1] == grid.cell_start[c]:
+                if start[c + 1] == start[c]:
                     continue
                 ok = ok | sphere_meets_cell(cell_row(grid.bounds, c), m0, m1, m2, r, margin)
     return ok
 
 
 cdef inline bint _run_near(
-    const double[:, ::1] runs, int64_t k, const double[:, :] R, const double[:] t,
-    bint inverse, double stretch, double grow, bint scan, CellGrid grid,
-    int64_t[:, ::1] rng, double ih, double margin,
+    const double[:, ::1] runs, int64_t k, const double *R, const double *t, bint inverse,
+    double stretch, double grow, bint scan, CellGrid grid, double ih, double margin,
 ) noexcept nogil:
-    """Whether run k of ``runs`` may come near the grid's surface (`near_runs`)."""
+    """Whether run k of ``runs`` may come near the grid's surface (`near_runs`; ``R`` the 9
+    entries of the pose's matrix row by row, ``t`` its 3 of translation)."""
     cdef double c0 = runs[k, SPHERE_CENTRE], c1 = runs[k, SPHERE_CENTRE + 1]
     cdef double c2 = runs[k, SPHERE_CENTRE + 2]
     cdef double r, m, m0 = 0.0, m1 = 0.0, m2 = 0.0
     cdef int64_t d, i0, i1, cells
-    cdef bint ok = True
+    cdef int64_t lo[3]
+    cdef int64_t hi[3]
     if inverse:
         c0, c1, c2 = c0 - t[0], c1 - t[1], c2 - t[2]
     r = (
@@ -95,9 +97,9 @@ cdef inline bint _run_near(
     )
     for d in range(3):
         if inverse:
-            m = R[0, d] * c0 + R[1, d] * c1 + R[2, d] * c2
+            m = R[d] * c0 + R[3 + d] * c1 + R[6 + d] * c2
         else:
-            m = R[d, 0] * c0 + R[d, 1] * c1 + R[d, 2] * c2 + t[d]
+            m = R[3 * d] * c0 + R[3 * d + 1] * c1 + R[3 * d + 2] * c2 + t[d]
         if d == 0:
             m0 = m
         elif d == 1:
@@ -107,17 +109,18 @@ cdef inline bint _run_near(
         i0 = <int64_t>floor((m - r - grid.corner[d]) * ih)
         i1 = <int64_t>floor((m + r - grid.corner[d]) * ih)
         if i1 < 0 or i0 >= grid.shape[d]:
-            ok = False
-            break
-        rng[d, 0] = i0 if i0 > 0 else 0
-        rng[d, 1] = grid.shape[d] - 1 if grid.shape[d] - 1 < i1 else i1
-    ok = ok and surface_cells_in(grid.surface_table, grid.shape, rng) > 0
-    cells = (
-        (rng[0, 1] - rng[0, 0] + 1) * (rng[1, 1] - rng[1, 0] + 1) * (rng[2, 1] - rng[2, 0] + 1)
-    )
-    if ok and scan and cells <= SCAN_CELLS:
-        ok = _scan_cells(grid, rng, m0, m1, m2, r, margin)
-    return ok
+            return False
+        lo[d] = i0 if i0 > 0 else 0
+        hi[d] = grid.shape[d] - 1 if grid.shape[d] - 1 < i1 else i1
+    if surface_cells_box(
+        &grid.surface_table[0], grid.shape[1], grid.shape[2], lo[0], hi[0], lo[1], hi[1],
+        lo[2], hi[2],
+    ) <= 0:
+        return False
+    cells = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1)
+    if scan and cells <= SCAN_CELLS:
+        return _scan_cells(grid, lo, hi, m0, m1, m2, r, margin)
+    return True
 
 
 cdef inline void near_runs(
@@ -133,18 +136,23 @@ cdef inline void near_runs(
     with ``scan``, meet the box and the slab of what one of them holds
     (`tables.CellGrid.bounds`; worth it where runs are small against the cells, and done where
     the box spans at most `SCAN_CELLS` cells). Where ``parent`` is not empty, run k is tested
-    only if ``parent[k // per]`` (its block is near). ``rng``: scratch (3, 2)."""
+    only if ``parent[k // per]`` (its block is near). ``rng``: scratch (3, 2), unused (the
+    boxes of cells are kept in locals)."""
     cdef double ih = 1.0 / grid.cell
     cdef double margin = GRID_MARGIN * grid.cell
     cdef bint levels = parent.shape[0] > 0
-    cdef int64_t k
+    cdef double Rl[9]
+    cdef double tl[3]
+    cdef int64_t k, i, j
+    for i in range(3):
+        tl[i] = t[i]
+        for j in range(3):
+            Rl[3 * i + j] = R[i, j]
     for k in range(runs.shape[0]):
         if levels and not parent[k // per]:
             near[k] = False
             continue
-        near[k] = _run_near(
-            runs, k, R, t, inverse, stretch, grow, scan, grid, rng, ih, margin
-        )
+        near[k] = _run_near(runs, k, Rl, tl, inverse, stretch, grow, scan, grid, ih, margin)
 
 
 cdef inline int64_t _cotree_cell(
