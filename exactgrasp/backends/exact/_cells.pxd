@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Cell-grid kernels of the exact backend (Cython, inline): which cell holds a point, which
 cells a triangle touches, how many surface cells a box of cells holds.
 
@@ -109,6 +109,30 @@ cdef inline int64_t surface_cells_in(
     cdef int64_t a0 = rng[0, 0] * s0, a1 = (rng[0, 1] + 1) * s0
     cdef int64_t b0 = rng[1, 0] * s1, b1 = (rng[1, 1] + 1) * s1
     cdef int64_t c0 = rng[2, 0], c1 = rng[2, 1] + 1
+    return (
+        table[a1 + b1 + c1]
+        - table[a0 + b1 + c1]
+        - table[a1 + b0 + c1]
+        - table[a1 + b1 + c0]
+        + table[a0 + b0 + c1]
+        + table[a0 + b1 + c0]
+        + table[a1 + b0 + c0]
+        - table[a0 + b0 + c0]
+    )
+
+
+cdef inline int64_t surface_cells_box(
+    const int64_t *table, int64_t n1, int64_t n2, int64_t i0, int64_t i1, int64_t j0,
+    int64_t j1, int64_t k0, int64_t k1,
+) noexcept nogil:
+    """`surface_cells_in` of the box of cells [i0, i1] x [j0, j1] x [k0, k1] (inclusive), the
+    summed-volume table ``table`` given by its first entry, the grid's cells per axis by the
+    last two (n1, n2)."""
+    cdef int64_t s1 = n2 + 1
+    cdef int64_t s0 = (n1 + 1) * s1
+    cdef int64_t a0 = i0 * s0, a1 = (i1 + 1) * s0
+    cdef int64_t b0 = j0 * s1, b1 = (j1 + 1) * s1
+    cdef int64_t c0 = k0, c1 = k1 + 1
     return (
         table[a1 + b1 + c1]
         - table[a0 + b1 + c1]

@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Stage "seeds" of the exact kernel, its first search (Cython, inline): the object's edges
 near the hand's surface, each walking the hand-grid cells it passes, against the hand faces
 listed there (`object_edge_seeds`, in the hand's frame). The pairs go to the seed buffer
@@ -9,10 +9,10 @@ explains why the two searches find a pair on every curve where the surfaces cros
 from libc.math cimport INFINITY, fabs, floor
 from libc.stdint cimport int64_t, uint8_t
 
-from exactgrasp.backends.exact._cells cimport surface_cells_in
+from exactgrasp.backends.exact._cells cimport surface_cells_box
 from exactgrasp.backends.exact._constants cimport CHUNK, FILTER_ERR, GRID_MARGIN, PLANE_TOL
 from exactgrasp.backends.exact._filters cimport (
-    cell_row, cell_survivors, dmax, dmin, filter_row, may_cross, piece_box, piece_meets_cell,
+    cell_row, cell_survivors, dmax, dmin, may_cross, piece_box, piece_meets_cell,
     piece_survivors,
 )
 from exactgrasp.backends.exact._tables cimport (
@@ -42,13 +42,14 @@ cdef inline int64_t _clamp(int64_t i, int64_t top) noexcept nogil:
 
 
 cdef inline bint _edge_box_near(
-    CellGrid grid, int64_t[:, ::1] rng, double px, double py, double pz, double qx,
-    double qy, double qz, double ih, double margin,
+    CellGrid grid, double px, double py, double pz, double qx, double qy, double qz,
+    double ih, double margin,
 ) noexcept nogil:
-    """Whether the box of cells of edge p q (grown by ``margin``; its index ranges into ``rng``
-    (3, 2), clipped) holds a surface cell of the grid."""
+    """Whether the box of cells of edge p q (grown by ``margin``, clipped to the grid) holds a
+    surface cell of the grid."""
     cdef double a, b
-    cdef int64_t d, i0, i1
+    cdef int64_t d, i0, i1, lo[3]
+    cdef int64_t hi[3]
     for d in range(3):
         a = px if d == 0 else (py if d == 1 else pz)
         b = qx if d == 0 else (qy if d == 1 else qz)
@@ -56,9 +57,12 @@ cdef inline bint _edge_box_near(
         i1 = <int64_t>floor((dmax(a, b) + margin - grid.corner[d]) * ih)
         if i1 < 0 or i0 >= grid.shape[d]:
             return False
-        rng[d, 0] = i0 if i0 > 0 else 0
-        rng[d, 1] = grid.shape[d] - 1 if grid.shape[d] - 1 < i1 else i1
-    return surface_cells_in(grid.surface_table, grid.shape, rng) != 0
+        lo[d] = i0 if i0 > 0 else 0
+        hi[d] = grid.shape[d] - 1 if grid.shape[d] - 1 < i1 else i1
+    return surface_cells_box(
+        &grid.surface_table[0], grid.shape[1], grid.shape[2], lo[0], hi[0], lo[1], hi[1],
+        lo[2], hi[2],
+    ) != 0
 
 
 ctypedef (double, double) Span
@@ -97,6 +101,11 @@ cdef inline int64_t _piece_seeds(
     when the buffer is full."""
     cdef double x0, y0, z0, x1, y1, z1, eps
     cdef int64_t m, kept, j, ft
+    cdef const int64_t *faces = &grid.cell_faces[0]
+    cdef const int64_t *survivors = &work.survivors[0]
+    cdef const float *filter_err = &hand.filter_err[0]
+    cdef const float *filters = &hand.filters[0, 0]
+    cdef int64_t columns = hand.filters.shape[1]
     x0, y0, z0, x1, y1, z1 = piece_box(ax_, ay_, az_, bx_, by_, bz_, margin)
     if not piece_meets_cell(
         cell_row(grid.bounds, c), ax_, ay_, az_, bx_, by_, bz_, x0, y0, z0, x1, y1, z1, margin
@@ -108,11 +117,11 @@ cdef inline int64_t _piece_seeds(
     )
     kept = piece_survivors(grid.boxes, work.survivors, m, ax_, ay_, az_, bx_, by_, bz_, margin)
     for j in range(kept):
-        ft = grid.cell_faces[work.survivors[j]]
+        ft = faces[survivors[j]]
         # Both ends beyond the tolerance on one side: no crossing. Else the crossing point
         # must not lie beyond it outside an edge of the face.
-        eps = (hand.filter_err[ft] + FILTER_ERR) * gscale
-        if not may_cross(filter_row(hand.filters, ft), px, py, pz, qx, qy, qz, eps, ptol, gscale):
+        eps = (filter_err[ft] + FILTER_ERR) * gscale
+        if not may_cross(filters + ft * columns, px, py, pz, qx, qy, qz, eps, ptol, gscale):
             continue
         n = _append_seed(work.seeds, n, ft, s1)
         if n < 0:
@@ -196,22 +205,28 @@ cdef inline int64_t object_edge_seeds(
     cdef double h = hand_grid.cell
     cdef double ih = 1.0 / h, margin = GRID_MARGIN * h, ptol = PLANE_TOL * h
     cdef double px, py, pz, qx, qy, qz, l0, l1
+    cdef const int64_t *order = &obj.edge_order[0]
+    cdef const int64_t *E = &object_mesh.edges[0, 0]
+    cdef const int64_t *EF = &object_mesh.edge_faces[0, 0]
+    cdef const double *P = &BV[0, 0]
+    cdef int64_t nedges = obj.edge_order.shape[0], efs = object_mesh.edge_faces.shape[1]
+    cdef int64_t vw = BV.shape[1], ew = object_mesh.edges.shape[1]
     cdef int64_t r, kk, top, f, u, v, s1
     for r in range(near.shape[0]):
         if not near[r]:
             continue
         top = r * CHUNK + CHUNK
-        if obj.edge_order.shape[0] < top:
-            top = obj.edge_order.shape[0]
+        if nedges < top:
+            top = nedges
         for kk in range(r * CHUNK, top):
-            f = obj.edge_order[kk]
-            u, v = object_mesh.edges[f, 0], object_mesh.edges[f, 1]
-            px, py, pz = BV[u, 0], BV[u, 1], BV[u, 2]
-            qx, qy, qz = BV[v, 0], BV[v, 1], BV[v, 2]
+            f = order[kk]
+            u, v = E[ew * f], E[ew * f + 1]
+            px, py, pz = P[vw * u], P[vw * u + 1], P[vw * u + 2]
+            qx, qy, qz = P[vw * v], P[vw * v + 1], P[vw * v + 2]
             # The edge's box of cells must hold a surface cell.
-            if not _edge_box_near(hand_grid, work.cell_range, px, py, pz, qx, qy, qz, ih, margin):
+            if not _edge_box_near(hand_grid, px, py, pz, qx, qy, qz, ih, margin):
                 continue
-            s1 = object_mesh.edge_faces[f, 0]
+            s1 = EF[efs * f]
             l0, l1 = _grid_span(hand_grid, px, py, pz, qx - px, qy - py, qz - pz)
             if l0 > l1:
                 continue

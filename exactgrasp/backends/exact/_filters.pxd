@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """The seeds' filters (Cython, inline): the tests `_seeds` runs on what a grid cell holds and
 on each listed face, before a candidate pair is kept.
 
@@ -158,15 +158,15 @@ cdef inline bint piece_meets_cell(
 
 
 cdef inline bint box_meets(
-    const float[:, ::1] B, int64_t i, double x0, double y0, double z0, double x1, double y1,
-    double z1,
+    const float *row, double x0, double y0, double z0, double x1, double y1, double z1
 ) noexcept nogil:
-    """Whether box row i of ``B`` (float32, columns `BOX_MIN`, `BOX_MAX`) meets the box
-    (x0, y0, z0, x1, y1, z1) (lower corner, upper corner), with one branch."""
+    """Whether the box of row ``row`` (a pointer to its first value; float32, columns
+    `BOX_MIN`, `BOX_MAX`) meets the box (x0, y0, z0, x1, y1, z1) (lower corner, upper corner),
+    with one branch."""
     cdef int lo = BOX_MIN, hi = BOX_MAX
     return (
-        (B[i, lo] <= x1) & (B[i, hi] >= x0) & (B[i, lo + 1] <= y1) & (B[i, hi + 1] >= y0)
-        & (B[i, lo + 2] <= z1) & (B[i, hi + 2] >= z0)
+        (row[lo] <= x1) & (row[hi] >= x0) & (row[lo + 1] <= y1) & (row[hi + 1] >= y0)
+        & (row[lo + 2] <= z1) & (row[hi + 2] >= z0)
     )
 
 
@@ -180,17 +180,23 @@ cdef inline int64_t cell_survivors(
     ``group_start``, ``groups`` and ``boxes``): the list's groups' boxes first, then the boxes
     of the groups that meet it, each comparison evaluated in full and decided with one branch.
     The entries go to ``buf``; returns how many."""
+    # Base pointers and row lengths read once (stores to ``buf`` could alias them otherwise).
+    cdef const float *groups = &GB[0, 0]
+    cdef const float *boxes = &CBB[0, 0]
+    cdef int64_t *out = &buf[0]
+    cdef int64_t gw = GB.shape[1], bw = CBB.shape[1]
+    cdef int64_t g0 = gs[c], g1 = gs[c + 1], start = cs[c], end = cs[c + 1]
     cdef int64_t m = 0, g, q, q0, q1
-    for g in range(gs[c], gs[c + 1]):
-        if not box_meets(GB, g, x0, y0, z0, x1, y1, z1):
+    for g in range(g0, g1):
+        if not box_meets(groups + g * gw, x0, y0, z0, x1, y1, z1):
             continue
-        q0 = cs[c] + LIST_GROUP * (g - gs[c])
+        q0 = start + LIST_GROUP * (g - g0)
         q1 = q0 + LIST_GROUP
-        if cs[c + 1] < q1:
-            q1 = cs[c + 1]
+        if end < q1:
+            q1 = end
         for q in range(q0, q1):
-            buf[m] = q
-            m += 1 if box_meets(CBB, q, x0, y0, z0, x1, y1, z1) else 0
+            out[m] = q
+            m += 1 if box_meets(boxes + q * bw, x0, y0, z0, x1, y1, z1) else 0
     return m
 
 
@@ -206,22 +212,27 @@ cdef inline int64_t piece_survivors(
     cdef double adx = fabs(dx_), ady = fabs(dy_), adz = fabs(dz_)
     cdef double slack = 4.0 * margin * (adx + ady + adz)
     cdef double hx, hy, hz, cx, cy, cz
+    cdef const float *boxes = &CBB[0, 0]
+    cdef const float *row
+    cdef int64_t *out = &buf[0]
+    cdef int64_t bw = CBB.shape[1]
     cdef int64_t j, q, kept = 0
     cdef bint apart
     for j in range(m):
-        q = buf[j]
+        q = out[j]
+        row = boxes + q * bw
         # Sums and differences of two float32 values stay float32 (as numba kept them).
-        hx = 0.5 * <float>(CBB[q, BOX_MAX] - CBB[q, BOX_MIN])
-        hy = 0.5 * <float>(CBB[q, BOX_MAX + 1] - CBB[q, BOX_MIN + 1])
-        hz = 0.5 * <float>(CBB[q, BOX_MAX + 2] - CBB[q, BOX_MIN + 2])
-        cx = 0.5 * <float>(CBB[q, BOX_MAX] + CBB[q, BOX_MIN]) - ax_
-        cy = 0.5 * <float>(CBB[q, BOX_MAX + 1] + CBB[q, BOX_MIN + 1]) - ay_
-        cz = 0.5 * <float>(CBB[q, BOX_MAX + 2] + CBB[q, BOX_MIN + 2]) - az_
+        hx = 0.5 * <float>(row[BOX_MAX] - row[BOX_MIN])
+        hy = 0.5 * <float>(row[BOX_MAX + 1] - row[BOX_MIN + 1])
+        hz = 0.5 * <float>(row[BOX_MAX + 2] - row[BOX_MIN + 2])
+        cx = 0.5 * <float>(row[BOX_MAX] + row[BOX_MIN]) - ax_
+        cy = 0.5 * <float>(row[BOX_MAX + 1] + row[BOX_MIN + 1]) - ay_
+        cz = 0.5 * <float>(row[BOX_MAX + 2] + row[BOX_MIN + 2]) - az_
         apart = (
             (fabs(dz_ * cy - dy_ * cz) > adz * hy + ady * hz + slack)
             | (fabs(dx_ * cz - dz_ * cx) > adz * hx + adx * hz + slack)
             | (fabs(dy_ * cx - dx_ * cy) > ady * hx + adx * hy + slack)
         )
-        buf[kept] = q
+        out[kept] = q
         kept += 0 if apart else 1
     return kept

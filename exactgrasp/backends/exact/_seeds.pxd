@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Stage "seeds" of the exact kernel (Cython, inline): candidate face pairs from which
 `_search.trace_pairs` traces the curves where the two surfaces cross.
 
@@ -24,13 +24,13 @@ this module).
 from libc.math cimport fabs, floor
 from libc.stdint cimport int64_t, uint8_t
 
-from exactgrasp.backends.exact._cells cimport surface_cells_in
+from exactgrasp.backends.exact._cells cimport surface_cells_box
 from exactgrasp.backends.exact._constants cimport (
     COTREE_CHUNK, FILTER_ERR, GRID_MARGIN, PLANE_TOL, SPHERE_CENTRE, SPHERE_RADIUS,
 )
 from exactgrasp.backends.exact._edge_seeds cimport _append_seed, object_edge_seeds
 from exactgrasp.backends.exact._filters cimport (
-    cell_row, cell_survivors, dmax, filter_row, may_cross, piece_box, piece_meets_cell,
+    cell_row, cell_survivors, dmax, may_cross, piece_box, piece_meets_cell,
     sphere_meets_cell,
 )
 from exactgrasp.backends.exact._predicates cimport max3
@@ -56,35 +56,37 @@ cdef inline double frame_defect(const double[:, :] R) noexcept nogil:
 
 
 cdef inline bint _scan_cells(
-    CellGrid grid, const int64_t[:, ::1] rng, double m0, double m1, double m2, double r,
-    double margin,
+    CellGrid grid, const int64_t *lo, const int64_t *hi, double m0, double m1, double m2,
+    double r, double margin,
 ) noexcept nogil:
     """Whether the sphere of centre (m0, m1, m2) and radius r may meet what one of the surface
-    cells of the box of cells ``rng`` (3, 2) holds (`sphere_meets_cell`)."""
+    cells of the box of cells [lo, hi] (3 inclusive index ranges) holds (`sphere_meets_cell`)."""
     cdef int64_t n1 = grid.shape[1], n2 = grid.shape[2]
+    cdef const int64_t *start = &grid.cell_start[0]
     cdef int64_t i, j, kk, c
     cdef bint ok = False
-    for i in range(rng[0, 0], rng[0, 1] + 1):
-        for j in range(rng[1, 0], rng[1, 1] + 1):
-            for kk in range(rng[2, 0], rng[2, 1] + 1):
+    for i in range(lo[0], hi[0] + 1):
+        for j in range(lo[1], hi[1] + 1):
+            for kk in range(lo[2], hi[2] + 1):
                 c = (i * n1 + j) * n2 + kk
-                if grid.cell_start[c + 1] == grid.cell_start[c]:
+                if start[c + 1] == start[c]:
                     continue
                 ok = ok | sphere_meets_cell(cell_row(grid.bounds, c), m0, m1, m2, r, margin)
     return ok
 
 
 cdef inline bint _run_near(
-    const double[:, ::1] runs, int64_t k, const double[:, :] R, const double[:] t,
-    bint inverse, double stretch, double grow, bint scan, CellGrid grid,
-    int64_t[:, ::1] rng, double ih, double margin,
+    const double[:, ::1] runs, int64_t k, const double *R, const double *t, bint inverse,
+    double stretch, double grow, bint scan, CellGrid grid, double ih, double margin,
 ) noexcept nogil:
-    """Whether run k of ``runs`` may come near the grid's surface (`near_runs`)."""
+    """Whether run k of ``runs`` may come near the grid's surface (`near_runs`; ``R`` the 9
+    entries of the pose's matrix row by row, ``t`` its 3 of translation)."""
     cdef double c0 = runs[k, SPHERE_CENTRE], c1 = runs[k, SPHERE_CENTRE + 1]
     cdef double c2 = runs[k, SPHERE_CENTRE + 2]
     cdef double r, m, m0 = 0.0, m1 = 0.0, m2 = 0.0
     cdef int64_t d, i0, i1, cells
-    cdef bint ok = True
+    cdef int64_t lo[3]
+    cdef int64_t hi[3]
     if inverse:
         c0, c1, c2 = c0 - t[0], c1 - t[1], c2 - t[2]
     r = (
@@ -95,9 +97,9 @@ cdef inline bint _run_near(
     )
     for d in range(3):
         if inverse:
-            m = R[0, d] * c0 + R[1, d] * c1 + R[2, d] * c2
+            m = R[d] * c0 + R[3 + d] * c1 + R[6 + d] * c2
         else:
-            m = R[d, 0] * c0 + R[d, 1] * c1 + R[d, 2] * c2 + t[d]
+            m = R[3 * d] * c0 + R[3 * d + 1] * c1 + R[3 * d + 2] * c2 + t[d]
         if d == 0:
             m0 = m
         elif d == 1:
@@ -107,17 +109,18 @@ cdef inline bint _run_near(
         i0 = <int64_t>floor((m - r - grid.corner[d]) * ih)
         i1 = <int64_t>floor((m + r - grid.corner[d]) * ih)
         if i1 < 0 or i0 >= grid.shape[d]:
-            ok = False
-            break
-        rng[d, 0] = i0 if i0 > 0 else 0
-        rng[d, 1] = grid.shape[d] - 1 if grid.shape[d] - 1 < i1 else i1
-    ok = ok and surface_cells_in(grid.surface_table, grid.shape, rng) > 0
-    cells = (
-        (rng[0, 1] - rng[0, 0] + 1) * (rng[1, 1] - rng[1, 0] + 1) * (rng[2, 1] - rng[2, 0] + 1)
-    )
-    if ok and scan and cells <= SCAN_CELLS:
-        ok = _scan_cells(grid, rng, m0, m1, m2, r, margin)
-    return ok
+            return False
+        lo[d] = i0 if i0 > 0 else 0
+        hi[d] = grid.shape[d] - 1 if grid.shape[d] - 1 < i1 else i1
+    if surface_cells_box(
+        &grid.surface_table[0], grid.shape[1], grid.shape[2], lo[0], hi[0], lo[1], hi[1],
+        lo[2], hi[2],
+    ) <= 0:
+        return False
+    cells = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1)
+    if scan and cells <= SCAN_CELLS:
+        return _scan_cells(grid, lo, hi, m0, m1, m2, r, margin)
+    return True
 
 
 cdef inline void near_runs(
@@ -133,18 +136,23 @@ cdef inline void near_runs(
     with ``scan``, meet the box and the slab of what one of them holds
     (`tables.CellGrid.bounds`; worth it where runs are small against the cells, and done where
     the box spans at most `SCAN_CELLS` cells). Where ``parent`` is not empty, run k is tested
-    only if ``parent[k // per]`` (its block is near). ``rng``: scratch (3, 2)."""
+    only if ``parent[k // per]`` (its block is near). ``rng``: scratch (3, 2), unused (the
+    boxes of cells are kept in locals)."""
     cdef double ih = 1.0 / grid.cell
     cdef double margin = GRID_MARGIN * grid.cell
     cdef bint levels = parent.shape[0] > 0
-    cdef int64_t k
+    cdef double Rl[9]
+    cdef double tl[3]
+    cdef int64_t k, i, j
+    for i in range(3):
+        tl[i] = t[i]
+        for j in range(3):
+            Rl[3 * i + j] = R[i, j]
     for k in range(runs.shape[0]):
         if levels and not parent[k // per]:
             near[k] = False
             continue
-        near[k] = _run_near(
-            runs, k, R, t, inverse, stretch, grow, scan, grid, rng, ih, margin
-        )
+        near[k] = _run_near(runs, k, Rl, tl, inverse, stretch, grow, scan, grid, ih, margin)
 
 
 cdef inline int64_t _cotree_cell(
@@ -160,6 +168,11 @@ cdef inline int64_t _cotree_cell(
     count, or -1 when the buffer is full."""
     cdef int64_t m, jj, s
     cdef double eps
+    cdef const int64_t *faces = &grid.cell_faces[0]
+    cdef const int64_t *survivors = &work.survivors[0]
+    cdef const float *filter_err = &obj.filter_err[0]
+    cdef const float *filters = &obj.filters[0, 0]
+    cdef int64_t columns = obj.filters.shape[1]
     if grid.cell_start[c + 1] == grid.cell_start[c]:
         return n
     if not piece_meets_cell(
@@ -171,9 +184,9 @@ cdef inline int64_t _cotree_cell(
         work.survivors,
     )
     for jj in range(m):
-        s = grid.cell_faces[work.survivors[jj]]
-        eps = (obj.filter_err[s] + FILTER_ERR) * gscale + ferr
-        if not may_cross(filter_row(obj.filters, s), px, py, pz, qx, qy, qz, eps, ptol, gscale):
+        s = faces[survivors[jj]]
+        eps = (filter_err[s] + FILTER_ERR) * gscale + ferr
+        if not may_cross(filters + s * columns, px, py, pz, qx, qy, qz, eps, ptol, gscale):
             continue
         n = _append_seed(work.seeds, n, t1f, s)
         if n < 0:
@@ -241,29 +254,40 @@ cdef inline int64_t cotree_seeds(
     cdef double ih = 1.0 / h, grow = GRID_MARGIN * h + ferr
     cdef double ptol = PLANE_TOL * dmax(h, hcell) + 2.0 * ferr
     cdef double a0, a1, a2, b0, b1, b2, px, py, pz, qx, qy, qz
+    # The pose and the tables' rows read once, not per edge (stores to the seed buffer could
+    # alias them for the compiler).
+    cdef double r00 = R[0, 0], r01 = R[0, 1], r02 = R[0, 2], r10 = R[1, 0], r11 = R[1, 1]
+    cdef double r12 = R[1, 2], r20 = R[2, 0], r21 = R[2, 1], r22 = R[2, 2]
+    cdef double t0 = t[0], t1 = t[1], t2 = t[2]
+    cdef const double *V = &hand_mesh.vertices[0, 0]
+    cdef const int64_t *E = &hand_mesh.edges[0, 0]
+    cdef const int64_t *EF = &hand_mesh.edge_faces[0, 0]
+    cdef const int64_t *cotree = &hand.cotree[0]
+    cdef int64_t ncotree = hand.cotree.shape[0], efs = hand_mesh.edge_faces.shape[1]
+    cdef int64_t vw = hand_mesh.vertices.shape[1], ew = hand_mesh.edges.shape[1]
     cdef int64_t r, kk, top, e, u, v, t1f, pieces, w
     for r in range(near.shape[0]):
         if not near[r]:
             continue
         top = r * COTREE_CHUNK + COTREE_CHUNK
-        if hand.cotree.shape[0] < top:
-            top = hand.cotree.shape[0]
+        if ncotree < top:
+            top = ncotree
         for kk in range(r * COTREE_CHUNK, top):
-            e = hand.cotree[kk]
-            u, v = hand_mesh.edges[e, 0], hand_mesh.edges[e, 1]
-            a0 = hand_mesh.vertices[u, 0] - t[0]
-            a1 = hand_mesh.vertices[u, 1] - t[1]
-            a2 = hand_mesh.vertices[u, 2] - t[2]
-            b0 = hand_mesh.vertices[v, 0] - t[0]
-            b1 = hand_mesh.vertices[v, 1] - t[1]
-            b2 = hand_mesh.vertices[v, 2] - t[2]
-            px = R[0, 0] * a0 + R[1, 0] * a1 + R[2, 0] * a2
-            py = R[0, 1] * a0 + R[1, 1] * a1 + R[2, 1] * a2
-            pz = R[0, 2] * a0 + R[1, 2] * a1 + R[2, 2] * a2
-            qx = R[0, 0] * b0 + R[1, 0] * b1 + R[2, 0] * b2
-            qy = R[0, 1] * b0 + R[1, 1] * b1 + R[2, 1] * b2
-            qz = R[0, 2] * b0 + R[1, 2] * b1 + R[2, 2] * b2
-            t1f = hand_mesh.edge_faces[e, 0]
+            e = cotree[kk]
+            u, v = E[ew * e], E[ew * e + 1]
+            a0 = V[vw * u] - t0
+            a1 = V[vw * u + 1] - t1
+            a2 = V[vw * u + 2] - t2
+            b0 = V[vw * v] - t0
+            b1 = V[vw * v + 1] - t1
+            b2 = V[vw * v + 2] - t2
+            px = r00 * a0 + r10 * a1 + r20 * a2
+            py = r01 * a0 + r11 * a1 + r21 * a2
+            pz = r02 * a0 + r12 * a1 + r22 * a2
+            qx = r00 * b0 + r10 * b1 + r20 * b2
+            qy = r01 * b0 + r11 * b1 + r21 * b2
+            qz = r02 * b0 + r12 * b1 + r22 * b2
+            t1f = EF[efs * e]
             pieces = <int64_t>(max3(fabs(qx - px), fabs(qy - py), fabs(qz - pz)) * ih)
             if pieces < 1:
                 pieces = 1
