@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Certified tests of one pair of triangles, for the compiled crossings kernel
 (``_crossings.pyx``; Cython, inline).
 

@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Filtered orientation predicates for the compiled kernels (Cython, inline): the crossings
 kernel (``_pair_tests.pxd``) and the exact backend's kernel (``backends/exact/_pairs.pxd``,
 ``_classify.pxd``, ``_predicates.pxd``) cimport them.

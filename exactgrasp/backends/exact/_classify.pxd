@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Stage "classify" of the exact kernel (Cython, inline): the in/out status of every vertex of
 either mesh against the other, from the grids' cell statuses, the crossings' parities along
 edges and, for a shell with no classified vertex, one exact point test.

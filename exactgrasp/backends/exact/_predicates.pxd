@@ -1,4 +1,4 @@
-# cython: language_level=3
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Certified and filtered geometric tests of the exact kernel (Cython, inline): segment against
 triangle with certified orientation signs, triangle against box (separating axes).
 
