@@ -99,35 +99,14 @@ cdef inline int64_t raster_triangles(
     return count
 
 
-cdef inline int64_t surface_cells_in(
-    const int64_t[::1] table, const int64_t[::1] n, const int64_t[:, ::1] rng
-) noexcept nogil:
-    """Number of surface cells in the box of cells ``rng`` (3, 2) (inclusive index ranges),
-    from the grid's summed-volume table (`tables.CellGrid.surface_table`)."""
-    cdef int64_t s1 = n[2] + 1
-    cdef int64_t s0 = (n[1] + 1) * s1
-    cdef int64_t a0 = rng[0, 0] * s0, a1 = (rng[0, 1] + 1) * s0
-    cdef int64_t b0 = rng[1, 0] * s1, b1 = (rng[1, 1] + 1) * s1
-    cdef int64_t c0 = rng[2, 0], c1 = rng[2, 1] + 1
-    return (
-        table[a1 + b1 + c1]
-        - table[a0 + b1 + c1]
-        - table[a1 + b0 + c1]
-        - table[a1 + b1 + c0]
-        + table[a0 + b0 + c1]
-        + table[a0 + b1 + c0]
-        + table[a1 + b0 + c0]
-        - table[a0 + b0 + c0]
-    )
-
-
 cdef inline int64_t surface_cells_box(
     const int64_t *table, int64_t n1, int64_t n2, int64_t i0, int64_t i1, int64_t j0,
     int64_t j1, int64_t k0, int64_t k1,
 ) noexcept nogil:
-    """`surface_cells_in` of the box of cells [i0, i1] x [j0, j1] x [k0, k1] (inclusive), the
-    summed-volume table ``table`` given by its first entry, the grid's cells per axis by the
-    last two (n1, n2)."""
+    """Number of surface cells in the box of cells [i0, i1] x [j0, j1] x [k0, k1] (inclusive
+    index ranges), from the grid's summed-volume table (`tables.CellGrid.surface_table`,
+    given by its first entry) in 8 reads; the grid's cells per axis by the last two (n1,
+    n2)."""
     cdef int64_t s1 = n2 + 1
     cdef int64_t s0 = (n1 + 1) * s1
     cdef int64_t a0 = i0 * s0, a1 = (i1 + 1) * s0

@@ -1,8 +1,9 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
 """Stage "seeds" of the exact kernel, its first search (Cython, inline): the object's edges
 near the hand's surface, each walking the hand-grid cells it passes, against the hand faces
-listed there (`object_edge_seeds`, in the hand's frame). The pairs go to the seed buffer
-(`_append_seed`, which the second search, `_seeds.cotree_seeds`, shares). ``_seeds.pxd``
+listed there (`object_edge_seeds`, in the hand's frame). The faces' plane and edge tests and
+the seed buffer (`filtered_seeds`, `_append_seed`) serve the second search,
+`_seeds.cotree_seeds`, too. ``_seeds.pxd``
 explains why the two searches find a pair on every curve where the surfaces cross.
 """
 
@@ -32,6 +33,39 @@ cdef inline int64_t _append_seed(
     seeds[n, 0] = t
     seeds[n, 1] = s
     return n + 1
+
+
+cdef inline int64_t filtered_seeds(
+    SideTables side, CellGrid grid, Workspace work, int64_t kept, double px, double py,
+    double pz, double qx, double qy, double qz, double gscale, double grow, double ptol,
+    int64_t fixed, bint fixed_hand, int64_t n,
+) noexcept nogil:
+    """The faces of ``side`` at the first ``kept`` of ``work.survivors`` (entries of the
+    grid's cell lists) that pass the plane and edge tests against segment p q (each face's
+    tolerance grown by ``grow``), each paired with face ``fixed`` of the other mesh (the hand's
+    where ``fixed_hand``) and appended to ``work.seeds`` from row n. Returns the new count, or
+    -1 when the buffer is full."""
+    cdef int64_t j, f
+    cdef double eps
+    cdef const int64_t *faces = &grid.cell_faces[0]
+    cdef const int64_t *survivors = &work.survivors[0]
+    cdef const float *filter_err = &side.filter_err[0]
+    cdef const float *filters = &side.filters[0, 0]
+    cdef int64_t columns = side.filters.shape[1]
+    for j in range(kept):
+        f = faces[survivors[j]]
+        # Both ends beyond the tolerance on one side: no crossing. Else the crossing point
+        # must not lie beyond it outside an edge of the face.
+        eps = (filter_err[f] + FILTER_ERR) * gscale + grow
+        if not may_cross(filters + f * columns, px, py, pz, qx, qy, qz, eps, ptol, gscale):
+            continue
+        if fixed_hand:
+            n = _append_seed(work.seeds, n, fixed, f)
+        else:
+            n = _append_seed(work.seeds, n, f, fixed)
+        if n < 0:
+            return -1
+    return n
 
 
 cdef inline int64_t _clamp(int64_t i, int64_t top) noexcept nogil:
@@ -99,13 +133,8 @@ cdef inline int64_t _piece_seeds(
     edge p q: the hand faces listed in c whose clipped boxes meet the piece and that pass the
     plane and edge tests, appended to ``work.seeds`` from row n. Returns the new count, or -1
     when the buffer is full."""
-    cdef double x0, y0, z0, x1, y1, z1, eps
-    cdef int64_t m, kept, j, ft
-    cdef const int64_t *faces = &grid.cell_faces[0]
-    cdef const int64_t *survivors = &work.survivors[0]
-    cdef const float *filter_err = &hand.filter_err[0]
-    cdef const float *filters = &hand.filters[0, 0]
-    cdef int64_t columns = hand.filters.shape[1]
+    cdef double x0, y0, z0, x1, y1, z1
+    cdef int64_t m, kept
     x0, y0, z0, x1, y1, z1 = piece_box(ax_, ay_, az_, bx_, by_, bz_, margin)
     if not piece_meets_cell(
         cell_row(grid.bounds, c), ax_, ay_, az_, bx_, by_, bz_, x0, y0, z0, x1, y1, z1, margin
@@ -116,17 +145,9 @@ cdef inline int64_t _piece_seeds(
         work.survivors,
     )
     kept = piece_survivors(grid.boxes, work.survivors, m, ax_, ay_, az_, bx_, by_, bz_, margin)
-    for j in range(kept):
-        ft = faces[survivors[j]]
-        # Both ends beyond the tolerance on one side: no crossing. Else the crossing point
-        # must not lie beyond it outside an edge of the face.
-        eps = (filter_err[ft] + FILTER_ERR) * gscale
-        if not may_cross(filters + ft * columns, px, py, pz, qx, qy, qz, eps, ptol, gscale):
-            continue
-        n = _append_seed(work.seeds, n, ft, s1)
-        if n < 0:
-            return -1
-    return n
+    return filtered_seeds(
+        hand, grid, work, kept, px, py, pz, qx, qy, qz, gscale, 0.0, ptol, s1, False, n
+    )
 
 
 cdef inline int64_t _edge_walk(

@@ -16,9 +16,9 @@ frame, the pose's departure from a rotation): they may keep a pair that does not
 its evaluation rejects, and never drop one that does. See "Method", step 2, in
 ``docs/exact-backend.md``.
 
-The first search's stages are ``_edge_seeds.pxd`` (`object_edge_seeds` and the seed buffer's
-`_append_seed` are cimported here, so that a kernel cimports every stage of the seeds from
-this module).
+The first search's stages are ``_edge_seeds.pxd`` (`object_edge_seeds` and the faces' tests
+and seed buffer both searches share, `filtered_seeds`, are cimported here, so that a kernel
+cimports every stage of the seeds from this module).
 """
 
 from libc.math cimport fabs, floor
@@ -26,11 +26,11 @@ from libc.stdint cimport int64_t, uint8_t
 
 from exactgrasp.backends.exact._cells cimport surface_cells_box
 from exactgrasp.backends.exact._constants cimport (
-    COTREE_CHUNK, FILTER_ERR, GRID_MARGIN, PLANE_TOL, SPHERE_CENTRE, SPHERE_RADIUS,
+    COTREE_CHUNK, GRID_MARGIN, PLANE_TOL, SPHERE_CENTRE, SPHERE_RADIUS,
 )
-from exactgrasp.backends.exact._edge_seeds cimport _append_seed, object_edge_seeds
+from exactgrasp.backends.exact._edge_seeds cimport filtered_seeds, object_edge_seeds
 from exactgrasp.backends.exact._filters cimport (
-    cell_row, cell_survivors, dmax, may_cross, piece_box, piece_meets_cell,
+    cell_row, cell_survivors, dmax, piece_box, piece_meets_cell,
     sphere_meets_cell,
 )
 from exactgrasp.backends.exact._predicates cimport max3
@@ -166,13 +166,7 @@ cdef inline int64_t _cotree_cell(
     against what the cell holds, then the listed faces' clipped boxes, each with one branch,
     then the plane and edge tests. Appended to ``work.seeds`` from row n; returns the new
     count, or -1 when the buffer is full."""
-    cdef int64_t m, jj, s
-    cdef double eps
-    cdef const int64_t *faces = &grid.cell_faces[0]
-    cdef const int64_t *survivors = &work.survivors[0]
-    cdef const float *filter_err = &obj.filter_err[0]
-    cdef const float *filters = &obj.filters[0, 0]
-    cdef int64_t columns = obj.filters.shape[1]
+    cdef int64_t m
     if grid.cell_start[c + 1] == grid.cell_start[c]:
         return n
     if not piece_meets_cell(
@@ -183,15 +177,9 @@ cdef inline int64_t _cotree_cell(
         grid.cell_start, grid.group_start, grid.groups, grid.boxes, c, x0, y0, z0, x1, y1, z1,
         work.survivors,
     )
-    for jj in range(m):
-        s = faces[survivors[jj]]
-        eps = (filter_err[s] + FILTER_ERR) * gscale + ferr
-        if not may_cross(filters + s * columns, px, py, pz, qx, qy, qz, eps, ptol, gscale):
-            continue
-        n = _append_seed(work.seeds, n, t1f, s)
-        if n < 0:
-            return -1
-    return n
+    return filtered_seeds(
+        obj, grid, work, m, px, py, pz, qx, qy, qz, gscale, ferr, ptol, t1f, True, n
+    )
 
 
 cdef inline int64_t _cotree_piece(

@@ -95,7 +95,7 @@ class CellGrid(NamedTuple):
     #: cell along a Morton curve of their clipped boxes' centres (`grids.list_groups`).
     cell_faces: np.ndarray
     #: ((shape + 1).prod(),) int64: summed-volume table of the surface cells, flat, so that a
-    #: box of cells' count takes 8 reads (`_cells.surface_cells_in`).
+    #: box of cells' count takes 8 reads (`_cells.surface_cells_box`).
     surface_table: np.ndarray
     #: (listed, 6) float32 (`BOX_MIN`, `BOX_MAX`): the listed faces' bounding boxes, in the order
     #: of `cell_faces`, each clipped to its cell (grown by `GRID_MARGIN`, rounded outwards): a
