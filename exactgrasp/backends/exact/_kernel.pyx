@@ -113,7 +113,7 @@ cdef class _Call:
                 named.Crossings(np.empty(cap, np.int64), np.empty(cap), np.empty(cap)),
                 np.zeros(2, np.int64), np.zeros(pairs, np.int64), np.zeros(pairs, np.int32),
                 np.empty((self.rows, 2), np.int64), np.empty((2, POINT_COLUMNS)),
-                np.empty((2, 3), np.int64), np.empty((2, 4)), np.empty((3, 2), np.int64),
+                np.empty((2, 3), np.int64), np.empty((2, 4)),
                 np.zeros(hand.parts.shape[0] - 1, np.bool_), np.empty(longest, np.int64),
                 np.empty((pairs if self.segs else 0, SEGMENT_COLUMNS)),
             )
@@ -190,7 +190,8 @@ cdef class _Entries:
     cdef int64_t n
 
     def __init__(self, int64_t first):
-        self.rows, self.values, self.n = np.empty(first, np.int64), np.empty((first, 6)), 0
+        self.rows, self.values = np.empty(first, np.int64), np.empty((first, MOMENT_COLUMNS))
+        self.n = 0
 
     cdef void add(self, MomentRows G, int64_t done, int64_t poses):
         """The rows pose number ``done`` (from 1) touched, appended (`_pose.copy_rows`); when

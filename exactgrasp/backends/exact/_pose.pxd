@@ -78,17 +78,17 @@ cdef inline double near_pass(
     cdef double stretch = 1.0 + 4.0 * defect + 16.0 * U
     cdef double ferr = 2.0 * (4.0 * defect + 16.0 * U) * gscale
     near_runs(
-        obj.edge_runs, R, t, False, stretch, 0.0, False, hand_grid, scratch.work.cell_range,
+        obj.edge_runs, R, t, False, stretch, 0.0, False, hand_grid,
         scratch.none, 1, scratch.near,
     )
     # The co-tree's runs in two levels: blocks of runs by the surface cells alone, then the
     # runs of near blocks against what those cells hold.
     near_runs(
-        hand.cotree_blocks, R, t, True, stretch, ferr, False, object_grid, scratch.work.cell_range,
+        hand.cotree_blocks, R, t, True, stretch, ferr, False, object_grid,
         scratch.none, 1, scratch.near_block,
     )
     near_runs(
-        hand.cotree_runs, R, t, True, stretch, ferr, True, object_grid, scratch.work.cell_range,
+        hand.cotree_runs, R, t, True, stretch, ferr, True, object_grid,
         scratch.near_block, COTREE_BLOCK, scratch.near_cotree,
     )
     return ferr

@@ -125,8 +125,8 @@ cdef inline bint _run_near(
 
 cdef inline void near_runs(
     const double[:, ::1] runs, const double[:, :] R, const double[:] t, bint inverse,
-    double stretch, double grow, bint scan, CellGrid grid, int64_t[:, ::1] rng,
-    const uint8_t[::1] parent, int64_t per, uint8_t[::1] near,
+    double stretch, double grow, bint scan, CellGrid grid, const uint8_t[::1] parent,
+    int64_t per, uint8_t[::1] near,
 ) noexcept nogil:
     """Which runs of segments may come near a grid's surface (``near``, one per run): the
     bounding sphere of each run (``runs`` (k, 4): centre, radius), moved by ``x -> R x + t``
@@ -136,8 +136,7 @@ cdef inline void near_runs(
     with ``scan``, meet the box and the slab of what one of them holds
     (`tables.CellGrid.bounds`; worth it where runs are small against the cells, and done where
     the box spans at most `SCAN_CELLS` cells). Where ``parent`` is not empty, run k is tested
-    only if ``parent[k // per]`` (its block is near). ``rng``: scratch (3, 2), unused (the
-    boxes of cells are kept in locals)."""
+    only if ``parent[k // per]`` (its block is near)."""
     cdef double ih = 1.0 / grid.cell
     cdef double margin = GRID_MARGIN * grid.cell
     cdef bint levels = parent.shape[0] > 0

@@ -97,7 +97,6 @@ cdef class Workspace:
     cdef readonly double[:, ::1] points
     cdef readonly int64_t[:, ::1] signs
     cdef readonly double[:, ::1] dists
-    cdef readonly int64_t[:, ::1] cell_range
     cdef readonly uint8_t[::1] part_crossed
     cdef readonly int64_t[::1] survivors
     cdef readonly double[:, ::1] segments

@@ -132,7 +132,6 @@ cdef class Workspace:
         self.points = tables.points
         self.signs = tables.signs
         self.dists = tables.dists
-        self.cell_range = tables.cell_range
         self.part_crossed = _bytes(tables.part_crossed)
         self.survivors = tables.survivors
         self.segments = tables.segments

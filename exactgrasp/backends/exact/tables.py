@@ -378,8 +378,6 @@ class Workspace(NamedTuple):
     signs: np.ndarray
     #: (2, 4) float64: those corners' signed distances and the row's error bound (`DIST_ERR`).
     dists: np.ndarray
-    #: (3, 2) int64: a box of grid cells (inclusive index ranges per axis).
-    cell_range: np.ndarray
     #: (hand parts,) bool: the hand parts one of whose own edges is crossed in this pose.
     part_crossed: np.ndarray
     #: (longest cell list of either grid,) int64: the listed faces of a cell that pass the box
