@@ -17,9 +17,10 @@ from libc.stdint cimport int64_t
 from libc.stdlib cimport free, realloc
 from libc.string cimport memcpy
 
+from exactgrasp.geometry._minmax cimport max2, max3
 from exactgrasp.geometry._pair_tests cimport (
-    CROSS, NO, UNSURE, Corner, Mesh, edge_triangle, load_corners, max2, max3,
-    meets_beyond_shared, orient_rows, spread,
+    CROSS, NO, UNSURE, Corner, Mesh, edge_triangle, load_corners, meets_beyond_shared, orient_rows,
+    spread,
 )
 from exactgrasp.geometry._predicates cimport certain_sign, orient_bound
 

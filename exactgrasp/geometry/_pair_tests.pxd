@@ -13,6 +13,7 @@ in a flat region touch only along their common edge or corner. Each answer is ei
 
 from libc.stdint cimport int64_t
 
+from exactgrasp.geometry._minmax cimport max2, max3
 from exactgrasp.geometry._predicates cimport certain_sign, orient_bound, orient_det
 
 # Result codes of a pair test: certainly apart, certainly crossing, or uncertain
@@ -29,16 +30,6 @@ ctypedef struct Mesh:
     const double *V  # vertices (n, 3)
     const int64_t *F  # faces (m, 3)
     const int64_t *ident  # (n,): vertices of one identity are one point
-
-
-cdef inline double max2(double a, double b) noexcept nogil:
-    """Python's ``max(a, b)``: the first of the greatest."""
-    return b if b > a else a
-
-
-cdef inline double max3(double a, double b, double c) noexcept nogil:
-    """Python's ``max(a, b, c)``: the first of the greatest."""
-    return max2(max2(a, b), c)
 
 
 cdef inline void load_corners(const Mesh *m, int64_t t, int64_t u, Corner *X) noexcept nogil:

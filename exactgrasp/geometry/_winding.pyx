@@ -13,23 +13,7 @@ import numpy as np
 from libc.math cimport atan2, ceil, floor, sqrt, M_PI
 from libc.stdint cimport int8_t, int64_t, uint8_t
 
-
-cdef inline double _min3(double a, double b, double c) noexcept nogil:
-    """Python's ``min(a, b, c)``: the first of the least."""
-    if b < a:
-        a = b
-    if c < a:
-        a = c
-    return a
-
-
-cdef inline double _max3(double a, double b, double c) noexcept nogil:
-    """Python's ``max(a, b, c)``: the first of the greatest."""
-    if b > a:
-        a = b
-    if c > a:
-        a = c
-    return a
+from exactgrasp.geometry._minmax cimport max3, min3
 
 
 cdef double _winding(
@@ -135,10 +119,10 @@ cdef void _column_crossings(
         ax, ay, az = T[t, 0, 0], T[t, 0, 1], T[t, 0, 2]
         bx, by, bz = T[t, 1, 0], T[t, 1, 1], T[t, 1, 2]
         cx, cy, cz = T[t, 2, 0], T[t, 2, 1], T[t, 2, 2]
-        i0 = max(0, <int64_t>ceil(_min3(ax, bx, cx)))
-        i1 = min(nx - 1, <int64_t>floor(_max3(ax, bx, cx)))
-        j0 = max(0, <int64_t>ceil(_min3(ay, by, cy)))
-        j1 = min(ny - 1, <int64_t>floor(_max3(ay, by, cy)))
+        i0 = max(0, <int64_t>ceil(min3(ax, bx, cx)))
+        i1 = min(nx - 1, <int64_t>floor(max3(ax, bx, cx)))
+        j0 = max(0, <int64_t>ceil(min3(ay, by, cy)))
+        j1 = min(ny - 1, <int64_t>floor(max3(ay, by, cy)))
         for i in range(i0, i1 + 1):
             px = <double>i
             for j in range(j0, j1 + 1):

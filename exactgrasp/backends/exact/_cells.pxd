@@ -11,7 +11,8 @@ were too small).
 from libc.math cimport floor
 from libc.stdint cimport int64_t
 
-from exactgrasp.backends.exact._predicates cimport max3, min3, tri_box
+from exactgrasp.backends.exact._predicates cimport tri_box
+from exactgrasp.geometry._minmax cimport max3, min3
 
 
 cdef inline int64_t cell_index(

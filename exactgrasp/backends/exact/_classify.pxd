@@ -16,6 +16,7 @@ from exactgrasp.backends.exact._constants cimport GRID_MARGIN, ROUNDING_PAD
 from exactgrasp.backends.exact._predicates cimport edge_triangle
 from exactgrasp.backends.exact._tables cimport CellGrid, HandTables, MeshTables
 from exactgrasp.backends.exact._tables cimport ObjectTables, PoseScratch
+from exactgrasp.geometry._minmax cimport max2, min2
 from exactgrasp.geometry._predicates cimport orient, orient_bound
 
 
@@ -148,16 +149,6 @@ cdef inline void hand_statuses(
                 S[i] = <int8_t>st
 
 
-cdef inline double _fold_max(double acc, double v) noexcept nogil:
-    """One step of ``max(...)`` as numba compiled it: ``v`` only where larger (first wins)."""
-    return v if v > acc else acc
-
-
-cdef inline double _fold_min(double acc, double v) noexcept nogil:
-    """One step of ``min(...)`` as numba compiled it: ``v`` only where it is smaller."""
-    return v if v < acc else acc
-
-
 cdef inline int64_t _ray_face(
     double x0, double x1, double x2, double yx, double yy, double yz,
     double[:, ::1] V, int64_t[:, ::1] F, int64_t f, double xerr,
@@ -172,8 +163,8 @@ cdef inline int64_t _ray_face(
         y_ax = yx if ax == 0 else (yy if ax == 1 else yz)
         x_ax = x0 if ax == 0 else (x1 if ax == 1 else x2)
         va, vb, vd = V[a, ax], V[b, ax], V[d, ax]
-        hi = _fold_max(_fold_max(_fold_max(_fold_max(va, vb), vd), x_ax), y_ax)
-        lo_ = _fold_min(_fold_min(_fold_min(_fold_min(va, vb), vd), x_ax), y_ax)
+        hi = max2(max2(max2(max2(va, vb), vd), x_ax), y_ax)
+        lo_ = min2(min2(min2(min2(va, vb), vd), x_ax), y_ax)
         span = hi - lo_
         if span > ext:
             ext = span

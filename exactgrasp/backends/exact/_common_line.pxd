@@ -26,7 +26,7 @@ from exactgrasp.backends.exact._constants cimport (
     PARAM_ROUNDING,
     U,
 )
-from exactgrasp.backends.exact._pairs cimport corner_crossing, max2, min2, segment_term
+from exactgrasp.backends.exact._pairs cimport corner_crossing, segment_term
 from exactgrasp.backends.exact._predicates cimport sign
 from exactgrasp.backends.exact._tables cimport (
     Crossings,
@@ -34,6 +34,7 @@ from exactgrasp.backends.exact._tables cimport (
     MeshTables,
     Workspace,
 )
+from exactgrasp.geometry._minmax cimport max2, min2
 
 
 # The state `_search.trace_pairs` shares with its stages: the call's constants and sums, the

@@ -13,12 +13,12 @@ from libc.stdint cimport int64_t, uint8_t
 from exactgrasp.backends.exact._cells cimport surface_cells_box
 from exactgrasp.backends.exact._constants cimport CHUNK, FILTER_ERR, GRID_MARGIN, PLANE_TOL
 from exactgrasp.backends.exact._filters cimport (
-    cell_row, cell_survivors, dmax, dmin, may_cross, piece_box, piece_meets_cell,
-    piece_survivors,
+    cell_row, cell_survivors, may_cross, piece_box, piece_meets_cell, piece_survivors,
 )
 from exactgrasp.backends.exact._tables cimport (
     CellGrid, MeshTables, ObjectTables, SideTables, Workspace,
 )
+from exactgrasp.geometry._minmax cimport max2, min2
 
 
 cdef inline int64_t _append_seed(
@@ -87,8 +87,8 @@ cdef inline bint _edge_box_near(
     for d in range(3):
         a = px if d == 0 else (py if d == 1 else pz)
         b = qx if d == 0 else (qy if d == 1 else qz)
-        i0 = <int64_t>floor((dmin(a, b) - margin - grid.corner[d]) * ih)
-        i1 = <int64_t>floor((dmax(a, b) + margin - grid.corner[d]) * ih)
+        i0 = <int64_t>floor((min2(a, b) - margin - grid.corner[d]) * ih)
+        i1 = <int64_t>floor((max2(a, b) + margin - grid.corner[d]) * ih)
         if i1 < 0 or i0 >= grid.shape[d]:
             return False
         lo[d] = i0 if i0 > 0 else 0
@@ -118,8 +118,8 @@ cdef inline Span _grid_span(
                 l0 = 2.0
             continue
         ta, tb = -o / dd, (size - o) / dd
-        l0 = dmax(l0, dmin(ta, tb))
-        l1 = dmin(l1, dmax(ta, tb))
+        l0 = max2(l0, min2(ta, tb))
+        l1 = min2(l1, max2(ta, tb))
     return l0, l1
 
 
@@ -177,7 +177,7 @@ cdef inline int64_t _edge_walk(
     gz = h / fabs(dz) if dz != 0 else INFINITY
     lam_a = l0
     while True:
-        lam_b = dmin(dmin(dmin(tx, ty), tz), l1)
+        lam_b = min2(min2(min2(tx, ty), tz), l1)
         c = (ix * n1 + iy) * n2 + iz
         if grid.cell_start[c + 1] > grid.cell_start[c]:
             n = _piece_seeds(

@@ -20,17 +20,7 @@ from exactgrasp.backends.exact._constants cimport (
     FILTER_NORMAL, FILTER_OFFSET, FILTER_SIDE_COLUMNS, FILTER_SIDE_OFFSET, FILTER_SIDES,
     LIST_GROUP, U,
 )
-from exactgrasp.backends.exact._predicates cimport max3
-
-
-cdef inline double dmin(double a, double b) noexcept nogil:
-    """``min(a, b)`` as numba evaluated it: the first smallest argument."""
-    return b if b < a else a
-
-
-cdef inline double dmax(double a, double b) noexcept nogil:
-    """``max(a, b)`` as numba evaluated it: the first largest argument."""
-    return b if b > a else a
+from exactgrasp.geometry._minmax cimport max2, max3, min2
 
 
 cdef inline bint sphere_meets_cell(
@@ -62,7 +52,7 @@ cdef inline CrossingPoint _crossing_point(
     a test of that point against the face's edges (`prepare.face_filters`): (fixed, x, y, z,
     tolerance), ``fixed`` False where the distances do not fix the point well enough (the face
     is then kept). ``g`` bounds every coordinate."""
-    cdef double tol = dmax(ptol, 2.0 * eps)
+    cdef double tol = max2(ptol, 2.0 * eps)
     cdef double span = fabs(dp) + fabs(dq)
     cdef double lam, dx, dy, dz, xerr
     if span <= 4.0 * tol:
@@ -94,7 +84,7 @@ cdef inline bint may_cross(
     coordinate."""
     cdef double dp = _filter_dot(row, FILTER_NORMAL, px, py, pz) - row[FILTER_OFFSET]
     cdef double dq = _filter_dot(row, FILTER_NORMAL, qx, qy, qz) - row[FILTER_OFFSET]
-    cdef double tol = dmax(ptol, 2.0 * eps)
+    cdef double tol = max2(ptol, 2.0 * eps)
     cdef bint fixed
     cdef double x, y, z, st
     cdef int s0, s1, s2
@@ -132,8 +122,8 @@ cdef inline Box piece_box(
     """The box of the piece a b of a segment, grown by ``grow``: (x0, y0, z0, x1, y1, z1),
     lower corner then upper corner."""
     return (
-        dmin(ax, bx) - grow, dmin(ay, by) - grow, dmin(az, bz) - grow,
-        dmax(ax, bx) + grow, dmax(ay, by) + grow, dmax(az, bz) + grow,
+        min2(ax, bx) - grow, min2(ay, by) - grow, min2(az, bz) - grow,
+        max2(ax, bx) + grow, max2(ay, by) + grow, max2(az, bz) + grow,
     )
 
 
@@ -152,8 +142,8 @@ cdef inline bint piece_meets_cell(
     return (
         (row[lo] <= x1) & (row[hi] >= x0) & (row[lo + 1] <= y1) & (row[hi + 1] >= y0)
         & (row[lo + 2] <= z1) & (row[hi + 2] >= z0)
-        & (dmin(pa, pb) <= row[CELL_SLAB_HIGH] + tol)
-        & (dmax(pa, pb) >= row[CELL_SLAB_LOW] - tol)
+        & (min2(pa, pb) <= row[CELL_SLAB_HIGH] + tol)
+        & (max2(pa, pb) >= row[CELL_SLAB_LOW] - tol)
     )
 
 

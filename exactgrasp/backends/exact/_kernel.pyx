@@ -48,6 +48,7 @@ from exactgrasp.backends.exact._tables cimport (
     PoseScratch,
     Workspace,
 )
+from exactgrasp.geometry._minmax cimport max2
 
 #: First size of the pair table (a power of two) and of the seed buffer; both double when a
 #: pose needs more (the pose is then computed again).
@@ -96,7 +97,7 @@ cdef class _Call:
         # Bounds on every vertex's length (hand; object in its frame): the error bounds'
         # coordinate scale. The coordinates are local (about the hand's centre), so it
         # measures the geometry's size, not its position.
-        self.amax = _first_max(vertex_bound(self.hand_mesh.vertices), LENGTH_FLOOR)
+        self.amax = max2(vertex_bound(self.hand_mesh.vertices), LENGTH_FLOOR)
         self.bmax = vertex_bound(self.object_mesh.vertices)
 
     cdef Workspace workspace(self):
@@ -133,11 +134,6 @@ def _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, wor
         np.zeros(obj.edge_runs.shape[0], np.bool_), np.zeros(hand.cotree_runs.shape[0], np.bool_),
         np.zeros(hand.cotree_blocks.shape[0], np.bool_), np.zeros(0, np.bool_), work,
     )
-
-
-cdef inline double _first_max(double a, double b) noexcept nogil:
-    """``max(a, b)`` as Python and numba evaluate it: ``a`` unless ``b`` is larger."""
-    return b if b > a else a
 
 
 cdef (double, double, int64_t, int64_t, int64_t) _search(_Call c, double gscale, double gb,
@@ -260,6 +256,18 @@ def pose_volumes(
     return np.asarray(entries.rows)[: entries.n], np.asarray(entries.values)[: entries.n]
 
 
+cdef inline void _take_pose(
+    const double[:, :, ::1] poses, Py_ssize_t ip, double[:, ::1] R, double[::1] t
+) noexcept nogil:
+    """Pose ``ip``'s rotation and translation copied into ``R`` (3, 3) and ``t`` (3,), which
+    the stages read as contiguous arrays."""
+    cdef Py_ssize_t a, b
+    for a in range(3):
+        t[a] = poses[ip, a, 3]
+        for b in range(3):
+            R[a, b] = poses[ip, a, b]
+
+
 cdef void _one_pose(
     _Call c, const double[:, :, ::1] poses, Py_ssize_t ip, double[::1] out,
     double[::1] bounds, int64_t[::1] codes, int64_t[:, ::1] stats, _Entries entries,
@@ -267,17 +275,13 @@ cdef void _one_pose(
     """Pose ``ip``: its volume, bound, code, statistics and, where asked, moments."""
     cdef double gb, gscale, ferr, seg, segerr, bound, vol = 0.0
     cdef int64_t ncross, npairs, code
-    cdef Py_ssize_t a, b
     with nogil:
-        for a in range(3):
-            c.t[a] = poses[ip, a, 3]
-            for b in range(3):
-                c.R[a, b] = poses[ip, a, b]
+        _take_pose(poses, ip, c.R, c.t)
         gb = move_object(
             c.R, c.t, c.object_mesh.vertices, c.object_mesh.faces, c.tiny, c.bmax,
             c.scratch.object_V, c.scratch.object_D, c.scratch.object_N,
         )
-        gscale = _first_max(c.amax, gb)
+        gscale = max2(c.amax, gb)
         ferr = near_pass(
             c.R, c.t, gscale, c.hand, c.hand_grid, c.obj, c.object_grid, c.scratch
         )

@@ -27,17 +27,8 @@ from exactgrasp.backends.exact._constants cimport (
 )
 from exactgrasp.backends.exact._predicates cimport CROSS, NO, edge_triangle
 from exactgrasp.backends.exact._tables cimport Crossings, MeshTables, Workspace
+from exactgrasp.geometry._minmax cimport max2, min2
 from exactgrasp.geometry._predicates cimport orient, orient_bound
-
-
-cdef inline double max2(double a, double b) noexcept nogil:
-    """``max(a, b)`` as numba evaluated it: the first largest argument."""
-    return b if b > a else a
-
-
-cdef inline double min2(double a, double b) noexcept nogil:
-    """``min(a, b)`` as numba evaluated it: the first smallest argument."""
-    return b if b < a else a
 
 
 cdef inline (int64_t, double) _side(

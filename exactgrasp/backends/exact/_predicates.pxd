@@ -9,6 +9,7 @@ from libc.math cimport fabs
 from libc.stdint cimport int64_t
 
 from exactgrasp.backends.exact._constants cimport DEGENERATE
+from exactgrasp.geometry._minmax cimport max3, min3
 from exactgrasp.geometry._predicates cimport orient
 
 # Outcomes of `edge_triangle` (and of a face pair): no crossing, a crossing, and `DEGENERATE`
@@ -22,26 +23,6 @@ cdef enum:
 cdef inline int64_t sign(double x) noexcept nogil:
     """+1 for a positive x, else -1 (for distances already known to be non-zero)."""
     return 1 if x > 0 else -1
-
-
-cdef inline double min3(double a, double b, double c) noexcept nogil:
-    """``min(a, b, c)`` as numba evaluated it: the first smallest argument."""
-    cdef double m = a
-    if b < m:
-        m = b
-    if c < m:
-        m = c
-    return m
-
-
-cdef inline double max3(double a, double b, double c) noexcept nogil:
-    """``max(a, b, c)`` as numba evaluated it: the first largest argument."""
-    cdef double m = a
-    if b > m:
-        m = b
-    if c > m:
-        m = c
-    return m
 
 
 cdef inline (int64_t, double) edge_triangle(

@@ -43,7 +43,7 @@ from exactgrasp.backends.exact._constants cimport (
     SEGMENT_Q,
     U,
 )
-from exactgrasp.backends.exact._pairs cimport max2, min2, pair
+from exactgrasp.backends.exact._pairs cimport pair
 from exactgrasp.backends.exact._predicates cimport CROSS
 from exactgrasp.backends.exact._tables cimport (
     HandTables,
@@ -51,6 +51,7 @@ from exactgrasp.backends.exact._tables cimport (
     ObjectTables,
     Workspace,
 )
+from exactgrasp.geometry._minmax cimport max2, min2
 
 # Multiplier of the pair table's hash (Fibonacci hashing; the int64 products wrap, so they
 # are taken in uint64_t).

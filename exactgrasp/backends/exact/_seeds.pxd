@@ -30,13 +30,12 @@ from exactgrasp.backends.exact._constants cimport (
 )
 from exactgrasp.backends.exact._edge_seeds cimport filtered_seeds, object_edge_seeds
 from exactgrasp.backends.exact._filters cimport (
-    cell_row, cell_survivors, dmax, piece_box, piece_meets_cell,
-    sphere_meets_cell,
+    cell_row, cell_survivors, piece_box, piece_meets_cell, sphere_meets_cell,
 )
-from exactgrasp.backends.exact._predicates cimport max3
 from exactgrasp.backends.exact._tables cimport (
     CellGrid, HandTables, MeshTables, SideTables, Workspace,
 )
+from exactgrasp.geometry._minmax cimport max2, max3
 
 # `near_runs` scans the cells of a run's box only up to this many (long edges make big runs).
 cdef enum:
@@ -51,7 +50,7 @@ cdef inline double frame_defect(const double[:, :] R) noexcept nogil:
     for i in range(3):
         for j in range(3):
             dot = R[0, i] * R[0, j] + R[1, i] * R[1, j] + R[2, i] * R[2, j]
-            worst = dmax(worst, fabs(dot - (1.0 if i == j else 0.0)))
+            worst = max2(worst, fabs(dot - (1.0 if i == j else 0.0)))
     return worst
 
 
@@ -239,7 +238,7 @@ cdef inline int64_t cotree_seeds(
     the kernel's, `PLANE_TOL` of it)."""
     cdef double h = object_grid.cell
     cdef double ih = 1.0 / h, grow = GRID_MARGIN * h + ferr
-    cdef double ptol = PLANE_TOL * dmax(h, hcell) + 2.0 * ferr
+    cdef double ptol = PLANE_TOL * max2(h, hcell) + 2.0 * ferr
     cdef double a0, a1, a2, b0, b1, b2, px, py, pz, qx, qy, qz
     # The pose and the tables' rows read once, not per edge (stores to the seed buffer could
     # alias them for the compiler).

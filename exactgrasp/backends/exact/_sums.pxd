@@ -37,6 +37,7 @@ from exactgrasp.backends.exact._tables cimport (
     ObjectTables,
     PoseScratch,
 )
+from exactgrasp.geometry._minmax cimport max2
 
 #: A term and its error bound.
 ctypedef (double, double) Term
@@ -44,11 +45,6 @@ ctypedef (double, double) Term
 ctypedef (double, double, bint) Sum
 #: A pose's volume, its bound and its code (`OK` or `DEGENERATE`).
 ctypedef (double, double, int64_t) Volume
-
-
-cdef inline double _max(double a, double b) noexcept nogil:
-    """Python's ``max(a, b)`` as numba compiled it: ``b`` only where it is greater."""
-    return b if b > a else a
 
 
 cdef inline void face_terms(
@@ -105,8 +101,8 @@ cdef inline Term edge_weight(
         fabs(D[t1, 0]) + fabs(D[t1, 1]) + fabs(D[t1, 2]) + fabs(D[t2, 0]) + fabs(D[t2, 1])
     )
     dn += fabs(D[t2, 2])
-    cdef double ui = _max(_max(fabs(V[i, 0]), fabs(V[i, 1])), fabs(V[i, 2]))
-    cdef double vj = _max(_max(fabs(V[j, 0]), fabs(V[j, 1])), fabs(V[j, 2]))
+    cdef double ui = max2(max2(fabs(V[i, 0]), fabs(V[i, 1])), fabs(V[i, 2]))
+    cdef double vj = max2(max2(fabs(V[j, 0]), fabs(V[j, 1])), fabs(V[j, 2]))
     return w, TERM_ERR * U * dn * ui * vj + (Dcoef[t1] + Dcoef[t2]) * g / 3.0
 
 

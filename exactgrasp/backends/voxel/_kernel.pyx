@@ -19,6 +19,8 @@ import numpy as np
 from libc.math cimport fabs, nextafter
 from libc.stdint cimport int32_t, int64_t, uint8_t, uint64_t
 
+from exactgrasp.geometry._minmax cimport max2, min2
+
 cdef extern from *:
     """
     #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
@@ -105,16 +107,6 @@ cdef struct Scratch:
     Py_ssize_t leaf
 
 
-cdef inline double _max(double a, double b) noexcept nogil:
-    """Python's ``max(a, b)``."""
-    return b if b > a else a
-
-
-cdef inline double _min(double a, double b) noexcept nogil:
-    """Python's ``min(a, b)``."""
-    return b if b < a else a
-
-
 cdef inline double _interpolate(double fx, double fy, double fz, int code) noexcept nogil:
     """Trilinear interpolation in a cell whose corner values are the bits of `code` (0 gives
     exactly 0, 255 gives 1 within rounding)."""
@@ -165,8 +157,8 @@ cdef inline void _move_points(
         gx = a00 * x + a01 * y + a02 * z + b0
         gy = a10 * x + a11 * y + a12 * z + b1
         gz = a20 * x + a21 * y + a22 * z + b2
-        gx, gy = _min(_max(gx, 0.0), top_x), _min(_max(gy, 0.0), top_y)
-        gz = _min(_max(gz, 0.0), top_z)
+        gx, gy = min2(max2(gx, 0.0), top_x), min2(max2(gy, 0.0), top_y)
+        gz = min2(max2(gz, 0.0), top_z)
         i, j, k = <int32_t>gx, <int32_t>gy, <int32_t>gz
         cells[p] = (i * ny + j) * nz + k
         fx[p], fy[p], fz[p] = gx - i, gy - j, gz - k
@@ -289,7 +281,7 @@ cdef inline double _pose(
         pose.b[r] = offset[p, r]
     for r in range(3):
         row = fabs(pose.a[r][0]) + fabs(pose.a[r][1]) + fabs(pose.a[r][2])
-        largest = _max(largest, fabs(pose.b[r]) + row * extent)
+        largest = max2(largest, fabs(pose.b[r]) + row * extent)
     return MARGIN * (1.0 + largest)
 
 
