@@ -112,8 +112,6 @@ def run_kernel(label, links, bodies, poses, faces, moments, capacity):
     """The kernel's raw outputs on one scene, as a dict of arrays (`OUTPUTS`), or None where
     the intake refuses the scene (recorded as refused)."""
     from exactgrasp.backends.exact import ExactBackend
-    from exactgrasp.backends.exact.intersector import EMPTY_MOMENTS, pose_volumes
-    from exactgrasp.backends.exact.tables import N_STATS
     from exactgrasp.errors import ExactGraspError
     from exactgrasp.overlap import _operands
 
@@ -130,16 +128,10 @@ def run_kernel(label, links, bodies, poses, faces, moments, capacity):
     # The same motions about the intersector's local origin c: x -> R x + (R c + t - c).
     local = np.array(poses, dtype=float)
     local[:, :3, 3] += local[:, :3, :3] @ x.origin - x.origin
-    k = len(local)
-    o, b = np.zeros(k), np.zeros(k)
-    c = np.zeros(k, np.int64)
-    st = np.zeros((k, N_STATS), np.int64)
-    start = np.zeros(k + 1, np.int64)
-    rows, values = pose_volumes(
-        local, x.hand_mesh, x.hand_tables, x.hand_grid, x.object_mesh, x.object_tables,
-        x.object_grid, x.tiny, x.capacity if capacity is None else capacity, o, b, c, st,
-        x.moment_tables if moments else EMPTY_MOMENTS, start,
-    )  # fmt: skip
+    capacity = x.capacity if capacity is None else capacity
+    o, b, c, st, entries = x._kernel(local, capacity, moments)
+    start = np.append(entries.begin, entries.end[-1:])
+    rows, values = entries.rows, entries.values
     return dict(volumes=o, bounds=b, codes=c, stats=st, start=start, rows=rows, values=values)
 
 
