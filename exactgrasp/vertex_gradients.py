@@ -244,8 +244,8 @@ def _gradients(backend: ExactBackend, A: tuple, B: tuple, poses: np.ndarray, tur
     rotation ``B``'s vertices were placed by (its derivatives are by them before it)."""
     k = len(poses)
     volumes = np.zeros(k)
-    # Zeros from the system: only the vertices of faces met get written (pages touched).
-    outs = (np.zeros((k, A[1][1], 3)), np.zeros((k, B[1][1], 3)))
+    # Every pose's rows are written by `vertex_gradients` (zeroed there, pose by pose).
+    outs = (np.empty((k, A[1][1], 3)), np.empty((k, B[1][1], 3)))
     if k == 0:
         return volumes, *outs
     intersector = backend.intersector_of(A[0], B[0], faces=True)

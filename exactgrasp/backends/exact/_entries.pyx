@@ -126,8 +126,8 @@ def vertex_sums(
     tables : face_gradients.VertexTables
         What each row gives each vertex.
     out_a, out_b : numpy.ndarray, shape (k, n_a, 3) and (k, n_b, 3), float64
-        Added to: the derivatives by the hand's vertices and by the object's (squared length
-        units).
+        Written, every element: the derivatives by the hand's vertices and by the object's
+        (squared length units).
     """
     cdef const int64_t[::1] b = np.ascontiguousarray(begin)
     cdef const int64_t[::1] e = np.ascontiguousarray(end)

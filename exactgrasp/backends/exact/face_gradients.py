@@ -19,7 +19,7 @@ either union (`ExactIntersector` with ``faces=True``), ``F = ∫ n dA = n A`` an
 face and corner (`vertex_tables`) against the moments' row ``(F, M)``. Each face of a union
 lies in one input face (manifold3d face ids, `moments.face_sources`), whose pieces add up.
 The kernel lists only the rows a pose touched (`moment_entries`), and `vertex_sums` adds only
-those onto the vertices.
+those onto the vertices, each pose's rows of the result zeroed just before.
 """
 
 from __future__ import annotations
@@ -145,9 +145,9 @@ def vertex_gradients(
     out_a: np.ndarray,
     out_b: np.ndarray,
 ) -> np.ndarray:
-    """Volumes (k,) of poses (k, 4, 4), their derivatives by every vertex added to ``out_a``
-    (k, n_a, 3) and ``out_b`` (k, n_b, 3) (zeros; squared length units), as ``tables``
-    (`vertex_tables`) numbers and turns them."""
+    """Volumes (k,) of poses (k, 4, 4), their derivatives by every vertex written to ``out_a``
+    (k, n_a, 3) and ``out_b`` (k, n_b, 3) (every element; squared length units), as
+    ``tables`` (`vertex_tables`) numbers and turns them."""
     volumes, entries = intersector.moment_entries(poses)
     vertex_sums(*entries, tables, out_a, out_b)
     return volumes
@@ -196,7 +196,7 @@ def mesh_vertex_gradients(
         motion); a body's in its own frame (``R^T`` of the derivative by its moved vertex).
     """
     tables = mesh_tables(intersector, hand, bodies) if tables is None else tables
-    out_a = np.zeros((len(poses), sum(len(V) for V, _ in hand), 3))
-    out_b = np.zeros((len(poses), sum(len(V) for V, _ in bodies), 3))
+    out_a = np.empty((len(poses), sum(len(V) for V, _ in hand), 3))
+    out_b = np.empty((len(poses), sum(len(V) for V, _ in bodies), 3))
     volumes = vertex_gradients(intersector, tables, poses, out_a, out_b)
     return volumes, out_a, out_b
