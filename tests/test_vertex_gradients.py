@@ -251,6 +251,29 @@ def test_kernel_rows_summed_onto_vertices_match_a_plain_evaluation(name):
     np.testing.assert_array_equal(r.grad_a[-1], r.grad_a[0])
 
 
+def test_vertex_markers_stand_for_the_faces_rows_they_replace():
+    # With a marker per vertex, an inside vertex of a part classified vertex by vertex lists
+    # its marker instead of adding its whole edges' shares to its faces' rows: the same
+    # volumes, fewer face rows listed, and the same rows once the markers are expanded.
+    from exactgrasp.backends.exact.moment_entries import dense
+
+    grasp, poses = barrett_in("box")
+    A = grasp.hand.link_arrays()
+    B = [(grasp.object.vertices + grasp.object_pose[:3, 3], grasp.object.faces)]
+    x = ExactBackend(n_jobs=1).intersector_of(A, B, faces=True)
+    volumes, plain = x.moment_entries(poses)
+    again, marked = x.moment_entries(poses, per_vertex=True)
+    np.testing.assert_array_equal(again, volumes)
+    part_from = x.moment_tables.part_from[0]
+    vertex_from = part_from + len(x.hand_tables.parts) - 1
+    assert (marked.rows >= vertex_from).sum() > len(poses)
+    assert (marked.rows < part_from).sum() < 0.7 * (plain.rows < part_from).sum()
+    want = dense(plain, x.moment_rows, x.moment_tables)
+    got = dense(marked, x.moment_rows, x.vertex_moment_tables)
+    assert np.abs(want).max() > 0
+    assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+
+
 def test_poses_the_kernel_runs_again_give_the_same_derivatives():
     # A crossing buffer far too small: every pose is run again with a larger one
     # (`extrapolate`), its rows made dense there (the parts' markers expanded) and listed again.

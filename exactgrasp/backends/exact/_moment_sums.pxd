@@ -111,7 +111,8 @@ cdef inline void whole_edge_moments(
     higher-numbered ones, crossed or not (`crossed_edge_moments` corrects the crossed ones),
     added to ``G``'s rows: one sum per link for a part classified whole (``uniform``) and
     inside (or its marker, `tables.MomentTables.part_from`), one row per inside vertex of the
-    other parts (edge by edge at a seam between links). Arguments as in `hand_moments`.
+    other parts (edge by edge at a seam between links; or the vertex's marker,
+    `moment_layout.vertex_markers`). Arguments as in `hand_moments`.
     """
     cdef double[:, ::1] rows = G.values
     cdef int64_t[::1] stamp = G.stamp, touched = G.touched, state = G.state
@@ -135,6 +136,10 @@ cdef inline void whole_edge_moments(
             if S[u] != 1:
                 continue
             lk = vlink[u]
+            if lk >= 0 and lk >= marker >= 0:
+                # A vertex's marker (`moment_layout.vertex_markers`): nothing to add.
+                listed = touch(stamp, touched, listed, pose, lk)
+                continue
             if lk >= 0:
                 listed = touch(stamp, touched, listed, pose, lk)
                 for d in range(MOMENT_COLUMNS):

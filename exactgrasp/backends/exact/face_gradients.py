@@ -18,8 +18,11 @@ either union (`ExactIntersector` with ``faces=True``), ``F = ∫ n dA = n A`` an
 (``P = n × M + n (n · P)`` and ``z - y`` lies in the face's plane): a fixed weight row per
 face and corner (`vertex_tables`) against the moments' row ``(F, M)``. Each face of a union
 lies in one input face (manifold3d face ids, `moments.face_sources`), whose pieces add up.
-The kernel lists only the rows a pose touched (`moment_entries`), and `vertex_sums` adds only
-those onto the vertices, each pose's rows of the result zeroed just before.
+The kernel lists only the rows a pose touched (`moment_entries`), a hand part classified whole
+and inside, or an inside vertex of a part classified vertex by vertex, one marker standing for
+its whole edges' shares (`moment_layout.vertex_markers`), and `vertex_sums` adds only those onto
+the vertices, each pose's rows of the result zeroed just before: what a marker gives each
+vertex is summed once per intersector (`vertex_tables`).
 """
 
 from __future__ import annotations
@@ -57,9 +60,10 @@ class VertexTables(NamedTuple):
     object_from: np.ndarray
     #: (1,) int64: the first part marker's row (`tables.MomentTables.part_from`).
     part_from: np.ndarray
-    #: (parts + 1,) int64: CSR start of each part's entries in `part_targets`.
+    #: (parts + n + 1,) int64: CSR start of each marker's entries in `part_targets`: the
+    #: parts', then the hand vertices' (`moment_layout.vertex_markers`).
     part_start: np.ndarray
-    #: (q,) int64: the hand vertices a part classified whole and inside moves the volume by.
+    #: (q,) int64: the hand vertices a marker's whole edges inside move the volume by.
     part_targets: np.ndarray
     #: (q, 3) float64: by how much (its entries' rows' corners summed; as `directions`).
     part_vectors: np.ndarray
@@ -109,7 +113,8 @@ def vertex_tables(
     wb, nb, tb = _side_tables(body[0], body_src, body[1], c)
     if turn is not None:
         nb = nb @ turn
-    mom = intersector.moment_tables
+    # The tables `moment_entries` runs with ``per_vertex``: a marker per part and per vertex.
+    mom = intersector.vertex_moment_tables
     return VertexTables(
         np.concatenate([wa, wb]),
         np.concatenate([na, nb]),
@@ -121,7 +126,7 @@ def vertex_tables(
 
 
 def _part_sums(mom, weights, directions, targets):
-    """Per part (`tables.MomentTables.part_start` ...), what its entries give each hand vertex
+    """Per marker (`tables.MomentTables.part_start` ...), what its entries give each hand vertex
     (`VertexTables.part_start`, ``part_targets``, ``part_vectors``), from the hand's rows'
     ``weights``, ``directions`` and ``targets`` (`_side_tables`)."""
     n_parts = len(mom.part_start) - 1
@@ -148,7 +153,7 @@ def vertex_gradients(
     """Volumes (k,) of poses (k, 4, 4), their derivatives by every vertex written to ``out_a``
     (k, n_a, 3) and ``out_b`` (k, n_b, 3) (every element; squared length units), as
     ``tables`` (`vertex_tables`) numbers and turns them."""
-    volumes, entries = intersector.moment_entries(poses)
+    volumes, entries = intersector.moment_entries(poses, per_vertex=True)
     vertex_sums(*entries, tables, out_a, out_b)
     return volumes
 

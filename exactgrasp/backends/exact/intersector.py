@@ -52,8 +52,12 @@ from exactgrasp.backends.exact.culling import (
 )
 from exactgrasp.backends.exact.extrapolate import extrapolated
 from exactgrasp.backends.exact.grids import build_grid, cell_order, grid_cell, morton_order
-from exactgrasp.backends.exact.intersection import POSE_SOURCES, Intersection
-from exactgrasp.backends.exact.moment_layout import empty_moment_tables, moment_layout
+from exactgrasp.backends.exact.intersection import POSE_SOURCES, Intersection, call_stats
+from exactgrasp.backends.exact.moment_layout import (
+    empty_moment_tables,
+    moment_layout,
+    vertex_markers,
+)
 from exactgrasp.backends.exact.moments import face_sources, original_ids, shift_moments
 from exactgrasp.backends.exact.options import ExactOptions, check_options
 from exactgrasp.backends.exact.prepare import (
@@ -70,9 +74,6 @@ from exactgrasp.backends.exact.tables import (
     DEGENERATE,
     N_STATS,
     OVERFLOW,
-    STAT_CELLS_INSIDE,
-    STAT_CELLS_OUTSIDE,
-    STAT_CELLS_TOUCHED,
     STAT_CROSSING,
     STAT_PAIRS,
 )
@@ -159,6 +160,9 @@ class ExactIntersector:
     face_sources : (numpy.ndarray (m, 2), numpy.ndarray (m_o, 2)) or None
         With ``faces``: the (link, input face) of each hand face in the kernel's order, and
         the (body, face) of each object face. ``moment_rows``: the moments' rows per pose.
+        ``moment_tables`` and, with ``faces``, ``vertex_moment_tables`` (else None): the
+        kernel's (`moment_layout`), the second with a marker per hand vertex
+        (`moment_layout.vertex_markers`, `moment_entries` with ``per_vertex``).
     """
 
     def __init__(
@@ -219,6 +223,8 @@ class ExactIntersector:
             self.hand_mesh, self.hand_tables, hand_src, len(self.link_ids), object_src,
             self.object_mesh,
         )  # fmt: skip
+        hand_at = (self.hand_mesh, self.hand_tables)
+        self.vertex_moment_tables = vertex_markers(self.moment_tables, *hand_at) if faces else None
         self.object_tables = object_tables(self.object_mesh)
         # Surfaces farther apart than this are certainly disjoint whatever the BVH's rounding.
         self.gap = CULL_GAP * scale
@@ -288,12 +294,15 @@ class ExactIntersector:
         apart: np.ndarray | None = None,
         crossing: np.ndarray | None = None,
         with_moments: bool = False,
+        tables=None,
     ):
         """Volumes, bounds, codes, statistics and `moment_entries.MomentEntries` (none without
-        ``with_moments``) of poses (k, 4, 4) in local coordinates; ``apart`` and ``crossing``
-        (k,) from `broad_phase` cull, None does not."""
+        ``with_moments``; by ``tables``, `moment_tables` where None) of poses (k, 4, 4) in
+        local coordinates; ``apart`` and ``crossing`` (k,) from `broad_phase` cull, None does
+        not."""
         n = len(poses)
         links = self.moment_rows if with_moments else 0
+        tables = self.moment_tables if tables is None else tables
         moments = entries_of.empty(n)
         out = np.zeros(n)
         bounds = np.zeros(n)
@@ -313,13 +322,13 @@ class ExactIntersector:
         idx = np.flatnonzero(todo)
         if len(idx):
             out[idx], bounds[idx], codes[idx], stats[idx], found = self._kernel(
-                poses[idx], self.capacity, with_moments
+                poses[idx], self.capacity, with_moments, tables
             )
             moments = entries_of.placed(found, idx, n)
 
         def samples(p: np.ndarray, capacity: int):
-            o, b, c, _, mo = self._kernel(p, capacity, with_moments)
-            return o, b, c, entries_of.dense(mo, links, self.moment_tables)
+            o, b, c, _, mo = self._kernel(p, capacity, with_moments, tables)
+            return o, b, c, entries_of.dense(mo, links, tables)
 
         limits = {}
         for i in np.flatnonzero((codes == DEGENERATE) | (codes == OVERFLOW)):
@@ -340,9 +349,11 @@ class ExactIntersector:
                 )
         return out, bounds, codes, stats, entries_of.appended(moments, limits)
 
-    def _kernel(self, poses: np.ndarray, capacity: int, with_moments: bool):
+    def _kernel(self, poses: np.ndarray, capacity: int, with_moments: bool, tables=None):
         """The kernel on poses (k, 4, 4) in local coordinates: volumes, bounds, codes,
-        statistics and `moment_entries.MomentEntries` (none without ``with_moments``)."""
+        statistics and `moment_entries.MomentEntries` (none without ``with_moments``; by
+        ``tables``, `moment_tables` where None)."""
+        mom = self.moment_tables if tables is None else tables
         k = len(poses)
         o, b = np.zeros(k), np.zeros(k)
         c = np.zeros(k, np.int64)
@@ -351,7 +362,7 @@ class ExactIntersector:
         rows, values = pose_volumes(
             np.ascontiguousarray(poses), self.hand_mesh, self.hand_tables, self.hand_grid,
             self.object_mesh, self.object_tables, self.object_grid, self.tiny, capacity,
-            o, b, c, st, self.moment_tables if with_moments else EMPTY_MOMENTS, start,
+            o, b, c, st, mom if with_moments else EMPTY_MOMENTS, start,
         )  # fmt: skip
         return o, b, c, st, entries_of.from_kernel(start, rows, values)
 
@@ -417,16 +428,19 @@ class ExactIntersector:
         flat[live] = shift_moments(flat[live], self.origin)
         return result.volumes, moments.reshape(*poses.shape[:-2], -1, 6)
 
-    def moment_entries(self, poses: np.ndarray):
+    def moment_entries(self, poses: np.ndarray, per_vertex: bool = False):
         """Volumes as `volumes` (k,) of poses (k, 4, 4), and the moments as
         `moment_entries.MomentEntries` of the k poses, in local coordinates (about `origin`,
-        the object moved by ``x -> R x + (R c + t - c)``, ``c`` the origin)."""
-        result, entries = self._run(poses, None, True)
+        the object moved by ``x -> R x + (R c + t - c)``, ``c`` the origin); ``per_vertex``
+        (with ``faces``): by `vertex_moment_tables`, each inside hand vertex of a part
+        classified vertex by vertex listing its marker instead of its edges' shares."""
+        tables = self.vertex_moment_tables if per_vertex else None
+        result, entries = self._run(poses, None, True, tables)
         return result.volumes, entries
 
-    def _run(self, poses, progress, with_moments):
+    def _run(self, poses, progress, with_moments, tables=None):
         """`intersect`'s result, and the `moment_entries.MomentEntries` of the poses, flat
-        (local coordinates; none without ``with_moments``)."""
+        (local coordinates; none without ``with_moments``; by ``tables``, as `_chunk`)."""
         t0 = time.perf_counter()
         # The same motions about the local origin c: x -> R x + (R c + t - c); repeats are
         # found there, so that their tolerance scales with the local geometry.
@@ -457,6 +471,7 @@ class ExactIntersector:
                 None if apart is None else apart[ix],
                 None if crossing is None else crossing[ix],
                 with_moments,
+                tables,
             )
 
         def store(ix: np.ndarray, result: tuple) -> None:
@@ -476,22 +491,7 @@ class ExactIntersector:
         pairs = stats[:, [STAT_PAIRS, STAT_CROSSING]].sum(0)
         out, bounds, codes, stats = out[back], bounds[back], codes[back], stats[back]
         bounds += repeat_error(every, flat[back], self.areas, self.size)
-        tot = stats.sum(0)
-        stats_out = {
-            "poses": len(every),
-            "poses_repeated": len(every) - n,
-            "poses_culled": int((codes == CULLED).sum()),
-            "poses_limit": int(((codes == DEGENERATE) | (codes == OVERFLOW)).sum()),
-            "poses_arranged": int((codes == ARRANGED).sum()),
-            "parts": len(self.hand_tables.parts) - 1,
-            "threads": jobs,
-            "parts_culled": int(tot[STAT_CELLS_OUTSIDE]),
-            "parts_inside": int(tot[STAT_CELLS_INSIDE]),
-            "parts_clipped": int(tot[STAT_CELLS_TOUCHED]),
-            "pairs_tested": int(pairs[0]),
-            "pairs_crossing": int(pairs[1]),
-            "seconds": time.perf_counter() - t0,
-        }
+        stats_out = call_stats(len(every), n, codes, stats, pairs, self.hand_tables, jobs, t0)
         shape = poses.shape[:-2]
         sources = POSE_SOURCES[codes].reshape(shape)
         result = Intersection(out.reshape(shape), bounds.reshape(shape), sources, stats_out)

@@ -2,7 +2,8 @@
 per intersector: which row each hand face adds to (its link, or with moments per face the face
 itself), the whole edges' shares, their sums per vertex and per part (``_moment_sums.pxd`` for
 what they are), and with moments per face the object's edges' shares in its own frame
-(``_object_moments.pxd``) and one marker row per part.
+(``_object_moments.pxd``) and one marker row per part; for the vertex derivatives, the same
+with one marker row per hand vertex too (`vertex_markers`).
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import numpy as np
 
 from exactgrasp.backends.exact.tables import MomentTables
 
-__all__ = ["empty_moment_tables", "moment_layout", "moment_tables"]
+__all__ = ["empty_moment_tables", "moment_layout", "moment_tables", "vertex_markers"]
 
 
 def _edge_shares(V, E, ET, unit, f, h):
@@ -116,6 +117,45 @@ def _object_tables(object_mesh, row0: int):
     ones = np.ones(len(E))
     shares = _edge_shares(V, E, ET, unit, ones, ones)
     return row0, (row0 + ET).astype(np.int64), shares, unit
+
+
+def vertex_markers(tables: MomentTables, mesh, hand) -> MomentTables:
+    """``tables`` (with moments per face and part markers) with one marker row per hand
+    vertex as well, after the parts': a vertex inside the object, of a part classified
+    vertex by vertex, lists its marker (row ``part_from + parts + vertex``) instead of adding
+    its whole edges' shares to their faces' rows. What a marker stands for is the entries of
+    `tables.MomentTables.part_start` from ``parts + vertex`` on: its whole edges' shares by
+    face, as a part's are (`moment_entries.dense` and `face_gradients.vertex_tables` read the
+    vertices' markers as more parts). The rows of a pose then hold only the crossed faces'
+    pieces and corrections; the volume and the kernel's arithmetic are the same, the faces'
+    moments the same sums taken in another order.
+
+    Parameters
+    ----------
+    tables : tables.MomentTables
+        `moment_tables` with ``markers`` (`moment_layout` with ``object_src``).
+    mesh, hand
+        As `moment_tables`.
+    """
+    E, n = mesh.edges, len(mesh.vertices)
+    nparts = len(hand.parts) - 1
+    rows = int(tables.part_from[0])
+    faces = int(tables.object_from[0])  # the hand's faces' rows come first
+    low = np.concatenate([E[:, 0], E[:, 0]])
+    face = tables.edge_links.T.reshape(-1)
+    vals = np.concatenate([tables.edge_moments[:, :6], tables.edge_moments[:, 6:]])
+    part_of = np.searchsorted(hand.parts[:, 1], low, side="right") - 1
+    # Each share twice: in its lower vertex's part's group and in that vertex's own group.
+    keys = np.concatenate([part_of, nparts + low]) * faces + np.concatenate([face, face])
+    start, link, sums = _grouped(keys, np.concatenate([vals, vals]), faces, nparts + n)
+    return tables._replace(
+        vertex_link=np.arange(rows + nparts, rows + nparts + n, dtype=np.int64),
+        vertex_moments=np.zeros((n, 6)),
+        part_start=start,
+        part_link=link,
+        part_moments=np.ascontiguousarray(sums),
+        row_count=np.array([rows + nparts + n], np.int64),
+    )
 
 
 def moment_layout(

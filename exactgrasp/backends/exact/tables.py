@@ -271,12 +271,14 @@ class MomentTables(NamedTuple):
     #: `EDGE_MOMENTS_T1`, `EDGE_MOMENTS_T2`.
     edge_moments: np.ndarray
     #: (n,) int64: the one link of the faces around each vertex, -1 where they come from
-    #: several (a seam between links).
+    #: several (a seam between links); with a marker per vertex
+    #: (`moment_layout.vertex_markers`), each vertex's marker row.
     vertex_link: np.ndarray
     #: (n, 6) float64: the summed moments of the whole edges from each vertex to
     #: higher-numbered ones (where `vertex_link` is not -1).
     vertex_moments: np.ndarray
-    #: (parts + 1,) int64: CSR start of each part's entries in `part_link`.
+    #: (parts + 1,) int64: CSR start of each part's entries in `part_link`; with a marker per
+    #: vertex, (parts + n + 1,): the vertices' entries after the parts'.
     part_start: np.ndarray
     #: (k,) int64: the link of each entry.
     part_link: np.ndarray
@@ -287,7 +289,8 @@ class MomentTables(NamedTuple):
     #: boundary inside the hand, face by face, ``_object_moments.pxd``), or -1: none.
     object_from: np.ndarray
     #: (1,) int64: the rows of a pose's `MomentRows`: the moments' ``L`` (links, or faces of
-    #: both meshes), then with `part_from` one marker per part; 0: none (volumes only).
+    #: both meshes), then with `part_from` one marker per part (and per hand vertex,
+    #: `moment_layout.vertex_markers`); 0: none (volumes only).
     row_count: np.ndarray
     #: (1,) int64: the row of part 0's marker, or -1: none. With markers a part classified
     #: whole and inside lists its marker (row ``part_from + part``) instead of adding its
