@@ -164,8 +164,9 @@ cdef inline void _add_interval_share(
     ``g = Σ (b² - a²) / 3 - f / 3``, on both its faces: for each face, ``f`` times the whole
     edge's share ``(F, M)`` plus ``(0, g (v - u) × F)``. ``V``, ``E``: the mesh's vertices and
     edges; ``elink``, ``emom``: each edge's rows and whole shares
-    (`tables.MomentTables.edge_links`, ``edge_moments``, or the object's)."""
-    cdef double[:, ::1] rows = G
+    (`tables.MomentTables.edge_links`, ``edge_moments``, or the object's). ``G`` is written
+    through as given: a local view of it would take and drop a reference (two atomic
+    operations) per crossed edge."""
     cdef int64_t u = E[e, 0], v = E[e, 1], side, lk, o
     cdef double dx = V[v, 0] - V[u, 0], dy = V[v, 1] - V[u, 1], dz = V[v, 2] - V[u, 2]
     cdef double fx, fy, fz
@@ -173,12 +174,12 @@ cdef inline void _add_interval_share(
         lk = elink[e, side]
         o = EDGE_MOMENTS_T2 if side else EDGE_MOMENTS_T1
         fx, fy, fz = emom[e, o], emom[e, o + 1], emom[e, o + 2]
-        rows[lk, 0] += f * fx
-        rows[lk, 1] += f * fy
-        rows[lk, 2] += f * fz
-        rows[lk, 3] += f * emom[e, o + 3] + g * (dy * fz - dz * fy)
-        rows[lk, 4] += f * emom[e, o + 4] + g * (dz * fx - dx * fz)
-        rows[lk, 5] += f * emom[e, o + 5] + g * (dx * fy - dy * fx)
+        G[lk, 0] += f * fx
+        G[lk, 1] += f * fy
+        G[lk, 2] += f * fz
+        G[lk, 3] += f * emom[e, o + 3] + g * (dy * fz - dz * fy)
+        G[lk, 4] += f * emom[e, o + 4] + g * (dz * fx - dx * fz)
+        G[lk, 5] += f * emom[e, o + 5] + g * (dx * fy - dy * fx)
 
 
 cdef inline Chain _sort_chain(
