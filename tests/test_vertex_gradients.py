@@ -262,7 +262,7 @@ def test_vertex_markers_stand_for_the_faces_rows_they_replace():
     B = [(grasp.object.vertices + grasp.object_pose[:3, 3], grasp.object.faces)]
     x = ExactBackend(n_jobs=1).intersector_of(A, B, faces=True)
     volumes, plain = x.moment_entries(poses)
-    again, marked = x.moment_entries(poses, per_vertex=True)
+    again, marked = x.moment_entries(poses, x.vertex_moment_tables)
     np.testing.assert_array_equal(again, volumes)
     part_from = x.moment_tables.part_from[0]
     vertex_from = part_from + len(x.hand_tables.parts) - 1

@@ -13,7 +13,7 @@ import numpy as np
 from libc.stdint cimport int64_t, uint8_t
 
 from exactgrasp.backends.exact cimport _cells, _classify, _face_gradients, _sums
-from exactgrasp.backends.exact._tables cimport CellGrid
+from exactgrasp.backends.exact._tables cimport CellGrid, VertexSums
 
 
 def raster_triangles(V, F, lo, double h, n, double margin):
@@ -133,14 +133,6 @@ def vertex_sums(
     cdef const int64_t[::1] e = np.ascontiguousarray(end)
     cdef const int64_t[::1] r = np.ascontiguousarray(rows)
     cdef const double[:, ::1] m = np.ascontiguousarray(values)
-    cdef const double[:, :, ::1] w = np.ascontiguousarray(tables.weights)
-    cdef const double[:, ::1] d = np.ascontiguousarray(tables.directions)
-    cdef const int64_t[:, ::1] t = np.ascontiguousarray(tables.targets)
-    cdef const int64_t[::1] ps = np.ascontiguousarray(tables.part_start)
-    cdef const int64_t[::1] pt = np.ascontiguousarray(tables.part_targets)
-    cdef const double[:, ::1] pv = np.ascontiguousarray(tables.part_vectors)
-    cdef int64_t first_object = tables.object_from[0], first_part = tables.part_from[0]
+    cdef VertexSums S = VertexSums(tables)
     with nogil:
-        _face_gradients.vertex_sums(
-            b, e, r, m, w, d, t, first_object, first_part, ps, pt, pv, out_a, out_b
-        )
+        _face_gradients.vertex_sums(b, e, r, m, S, out_a, out_b)

@@ -26,6 +26,7 @@ from exactgrasp.backends.exact._constants cimport (
     STAT_PAIRS,
 )
 from exactgrasp.backends.exact._classify cimport classify_vertices
+from exactgrasp.backends.exact._face_gradients cimport pose_sums, zero_pose
 from exactgrasp.backends.exact._pose cimport (
     cell_stats,
     clear_records,
@@ -46,6 +47,7 @@ from exactgrasp.backends.exact._tables cimport (
     MomentTables,
     ObjectTables,
     PoseScratch,
+    VertexSums,
     Workspace,
 )
 from exactgrasp.geometry._minmax cimport max2
@@ -67,6 +69,10 @@ cdef class _Call:
     cdef MomentTables mom
     cdef PoseScratch scratch
     cdef MomentRows G
+    cdef VertexSums sums
+    cdef double[:, :, ::1] out_a, out_b
+    cdef int64_t[::1] slots
+    cdef bint summing
     cdef object tuples
     cdef int64_t cap, pairs, rows, attempt, token
     cdef bint segs
@@ -74,7 +80,13 @@ cdef class _Call:
     cdef double[:, ::1] R
     cdef double[::1] t
 
-    def __init__(self, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap, mom):
+    def __init__(
+        self, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap, mom, sums
+    ):
+        self.summing = sums is not None
+        if self.summing:
+            self.sums = VertexSums(sums[0])
+            self.out_a, self.out_b, self.slots = sums[1], sums[2], sums[3]
         self.tuples = (hand_mesh, hand, hand_grid, object_mesh, obj, object_grid)
         self.hand_mesh, self.hand = MeshTables(hand_mesh), HandTables(hand)
         self.object_mesh, self.obj = MeshTables(object_mesh), ObjectTables(obj)
@@ -207,7 +219,7 @@ cdef class _Entries:
 def pose_volumes(
     const double[:, :, ::1] poses, hand_mesh, hand, hand_grid, object_mesh, obj, object_grid,
     double tiny, int64_t cap, double[::1] out, double[::1] bounds, int64_t[::1] codes,
-    int64_t[:, ::1] stats, mom, int64_t[::1] moment_start,
+    int64_t[:, ::1] stats, mom, int64_t[::1] moment_start, sums=None,
 ):
     """Volume of hand ∩ (pose · object) for each pose; the hand is fixed, the object is in its
     own frame. Arguments and results as the numba kernel's were (see ``docs/exact-backend.md``):
@@ -235,19 +247,28 @@ def pose_volumes(
         The hand's moment tables, or empty ones (volumes only: ``mom.row_count[0]`` is 0).
     moment_start : numpy.ndarray, shape (k + 1,), int64
         Filled with where each pose's moment entries start in the returned arrays.
+    sums : tuple, optional
+        ``(tables, out_a, out_b, slots)``: each pose's moments summed onto the vertices
+        instead of listed (`_face_gradients.pose_sums`; none are returned), by ``tables``
+        (`face_gradients.VertexTables`), into rows ``slots`` (k,) int64 of ``out_a``
+        (m, n_a, 3) and ``out_b`` (m, n_b, 3), written whole (zeros where the pose has no
+        moments: not `OK`, or a volume of 0).
 
     Returns
     -------
     rows : numpy.ndarray, shape (t,), int64
     values : numpy.ndarray, shape (t, 6), float64
         The moment rows each `OK` pose with a non-zero volume touched, in the order first
-        touched, and their moments (local coordinates). Empty for volumes only.
+        touched, and their moments (local coordinates). Empty for volumes only, and with
+        ``sums``.
     """
     cdef _Call c = _Call(
-        hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap, mom
+        hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, tiny, cap, mom, sums
     )
     cdef int64_t k = poses.shape[0]
-    cdef _Entries entries = _Entries(k * min(int(c.mom.row_count[0]), ROWS_PER_POSE))
+    cdef _Entries entries = _Entries(
+        0 if c.summing else k * min(int(c.mom.row_count[0]), ROWS_PER_POSE)
+    )
     cdef Py_ssize_t ip
     moment_start[0] = 0
     for ip in range(k):
@@ -304,7 +325,11 @@ cdef void _one_pose(
                     c.R, c.t, c.hand_mesh, c.hand, c.object_mesh, c.mom, c.scratch, ncross,
                     c.G,
                 )
-    if code == OK and vol > 0.0 and c.segs:
+        if c.summing:
+            zero_pose(c.out_a, c.out_b, c.slots[ip])
+            if code == OK and vol > 0.0 and c.segs:
+                pose_sums(c.G, c.sums, c.out_a, c.out_b, c.slots[ip])
+    if code == OK and vol > 0.0 and c.segs and not c.summing:
         entries.add(c.G, ip + 1, poses.shape[0])
     codes[ip] = code
     stats[ip, STAT_PAIRS] = npairs

@@ -4,7 +4,8 @@ tuple of `exactgrasp.backends.exact.tables`, field for field, each array a typed
 (C-contiguous; a boolean array is read as ``uint8_t``). A kernel indexes them as the named
 tuples are indexed (``hand.planes[f, FACE_NORMAL]``). `HandTables` and `ObjectTables` share
 `SideTables`, the fields a stage reads on either mesh. Each type is made from its named tuple
-(``MeshTables(named_tuple)``), the arrays shared, not copied."""
+(``MeshTables(named_tuple)``), the arrays shared, not copied; `VertexSums` is
+`face_gradients.VertexTables`, what the vertex derivatives' sums read."""
 
 from libc.stdint cimport int8_t, int32_t, int64_t, uint8_t
 
@@ -79,6 +80,16 @@ cdef class MomentRows:
     cdef readonly int64_t[::1] stamp
     cdef readonly int64_t[::1] touched
     cdef readonly int64_t[::1] state
+
+cdef class VertexSums:
+    cdef readonly double[:, :, ::1] weights
+    cdef readonly double[:, ::1] directions
+    cdef readonly int64_t[:, ::1] targets
+    cdef readonly int64_t[::1] object_from
+    cdef readonly int64_t[::1] part_from
+    cdef readonly int64_t[::1] part_start
+    cdef readonly int64_t[::1] part_targets
+    cdef readonly double[:, ::1] part_vectors
 
 cdef class Crossings:
     cdef readonly int64_t[::1] edge

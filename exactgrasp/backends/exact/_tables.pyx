@@ -109,6 +109,19 @@ cdef class MomentRows:
         self.touched = tables.touched
         self.state = tables.state
 
+cdef class VertexSums:
+    """`face_gradients.VertexTables`, compiled; made from that named tuple."""
+
+    def __init__(self, tables):
+        self.weights = tables.weights
+        self.directions = tables.directions
+        self.targets = tables.targets
+        self.object_from = tables.object_from
+        self.part_from = tables.part_from
+        self.part_start = tables.part_start
+        self.part_targets = tables.part_targets
+        self.part_vectors = tables.part_vectors
+
 cdef class Crossings:
     """`tables.Crossings`, compiled; made from that named tuple."""
 

@@ -18,11 +18,12 @@ either union (`ExactIntersector` with ``faces=True``), ``F = ∫ n dA = n A`` an
 (``P = n × M + n (n · P)`` and ``z - y`` lies in the face's plane): a fixed weight row per
 face and corner (`vertex_tables`) against the moments' row ``(F, M)``. Each face of a union
 lies in one input face (manifold3d face ids, `moments.face_sources`), whose pieces add up.
-The kernel lists only the rows a pose touched (`moment_entries`), a hand part classified whole
-and inside, or an inside vertex of a part classified vertex by vertex, one marker standing for
-its whole edges' shares (`moment_layout.vertex_markers`), and `vertex_sums` adds only those onto
-the vertices, each pose's rows of the result zeroed just before: what a marker gives each
-vertex is summed once per intersector (`vertex_tables`).
+The kernel sums, as each pose ends, only the rows it touched onto the vertices
+(`_face_gradients.pose_sums`; `_entries.vertex_sums` does the same from `moment_entries` where the
+limit or the arrangement gave a pose's rows), a hand part classified whole and inside, or an
+inside vertex of a part classified vertex by vertex, being one marker that stands for its whole
+edges' shares (`moment_layout.vertex_markers`): what a marker gives each vertex is summed once
+per intersector (`vertex_tables`).
 """
 
 from __future__ import annotations
@@ -31,7 +32,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from exactgrasp.backends.exact._entries import vertex_sums
 from exactgrasp.backends.exact.intersector import ExactIntersector
 
 __all__ = [
@@ -113,7 +113,7 @@ def vertex_tables(
     wb, nb, tb = _side_tables(body[0], body_src, body[1], c)
     if turn is not None:
         nb = nb @ turn
-    # The tables `moment_entries` runs with ``per_vertex``: a marker per part and per vertex.
+    # The tables `vertex_gradients` runs the kernel with: a marker per part and per vertex.
     mom = intersector.vertex_moment_tables
     return VertexTables(
         np.concatenate([wa, wb]),
@@ -153,9 +153,8 @@ def vertex_gradients(
     """Volumes (k,) of poses (k, 4, 4), their derivatives by every vertex written to ``out_a``
     (k, n_a, 3) and ``out_b`` (k, n_b, 3) (every element; squared length units), as
     ``tables`` (`vertex_tables`) numbers and turns them."""
-    volumes, entries = intersector.moment_entries(poses, per_vertex=True)
-    vertex_sums(*entries, tables, out_a, out_b)
-    return volumes
+    tables_run = intersector.vertex_moment_tables
+    return intersector.moment_entries(poses, tables_run, (tables, out_a, out_b))[0]
 
 
 def mesh_tables(

@@ -53,11 +53,7 @@ from exactgrasp.backends.exact.culling import (
 from exactgrasp.backends.exact.extrapolate import extrapolated
 from exactgrasp.backends.exact.grids import build_grid, cell_order, grid_cell, morton_order
 from exactgrasp.backends.exact.intersection import POSE_SOURCES, Intersection, call_stats
-from exactgrasp.backends.exact.moment_layout import (
-    empty_moment_tables,
-    moment_layout,
-    vertex_markers,
-)
+from exactgrasp.backends.exact.moment_layout import empty_moment_tables, moment_layout
 from exactgrasp.backends.exact.moments import face_sources, original_ids, shift_moments
 from exactgrasp.backends.exact.options import ExactOptions, check_options
 from exactgrasp.backends.exact.prepare import (
@@ -160,9 +156,8 @@ class ExactIntersector:
     face_sources : (numpy.ndarray (m, 2), numpy.ndarray (m_o, 2)) or None
         With ``faces``: the (link, input face) of each hand face in the kernel's order, and
         the (body, face) of each object face. ``moment_rows``: the moments' rows per pose.
-        ``moment_tables`` and, with ``faces``, ``vertex_moment_tables`` (else None): the
-        kernel's (`moment_layout`), the second with a marker per hand vertex
-        (`moment_layout.vertex_markers`, `moment_entries` with ``per_vertex``).
+        ``moment_tables``, ``vertex_moment_tables``: the kernel's, the second (``faces``; else
+        None) with a marker per hand vertex (`moment_layout`).
     """
 
     def __init__(
@@ -219,12 +214,11 @@ class ExactIntersector:
         )
         self.object_mesh = prepare_mesh(BV, BF)
         object_src = face_sources(self.object_solid, original_ids(bodies)) if faces else None
-        self.face_sources, self.moment_rows, self.moment_tables = moment_layout(
+        layout = moment_layout(
             self.hand_mesh, self.hand_tables, hand_src, len(self.link_ids), object_src,
             self.object_mesh,
         )  # fmt: skip
-        hand_at = (self.hand_mesh, self.hand_tables)
-        self.vertex_moment_tables = vertex_markers(self.moment_tables, *hand_at) if faces else None
+        self.face_sources, self.moment_rows, self.moment_tables, self.vertex_moment_tables = layout
         self.object_tables = object_tables(self.object_mesh)
         # Surfaces farther apart than this are certainly disjoint whatever the BVH's rounding.
         self.gap = CULL_GAP * scale
@@ -295,11 +289,12 @@ class ExactIntersector:
         crossing: np.ndarray | None = None,
         with_moments: bool = False,
         tables=None,
+        sums=None,
     ):
         """Volumes, bounds, codes, statistics and `moment_entries.MomentEntries` (none without
         ``with_moments``; by ``tables``, `moment_tables` where None) of poses (k, 4, 4) in
-        local coordinates; ``apart`` and ``crossing`` (k,) from `broad_phase` cull, None does
-        not."""
+        local coordinates; ``apart``, ``crossing`` (k,) from `broad_phase` cull, None does not;
+        ``sums`` (tables, out_a, out_b, rows (k,)): as `_kernel.pose_volumes`'s."""
         n = len(poses)
         links = self.moment_rows if with_moments else 0
         tables = self.moment_tables if tables is None else tables
@@ -322,8 +317,9 @@ class ExactIntersector:
         idx = np.flatnonzero(todo)
         if len(idx):
             out[idx], bounds[idx], codes[idx], stats[idx], found = self._kernel(
-                poses[idx], self.capacity, with_moments, tables
-            )
+                poses[idx], self.capacity, with_moments, tables,
+                None if sums is None else (*sums[:3], sums[3][idx]),
+            )  # fmt: skip
             moments = entries_of.placed(found, idx, n)
 
         def samples(p: np.ndarray, capacity: int):
@@ -349,10 +345,10 @@ class ExactIntersector:
                 )
         return out, bounds, codes, stats, entries_of.appended(moments, limits)
 
-    def _kernel(self, poses: np.ndarray, capacity: int, with_moments: bool, tables=None):
+    def _kernel(self, poses, capacity: int, with_moments: bool, tables=None, sums=None):
         """The kernel on poses (k, 4, 4) in local coordinates: volumes, bounds, codes,
-        statistics and `moment_entries.MomentEntries` (none without ``with_moments``; by
-        ``tables``, `moment_tables` where None)."""
+        statistics and `moment_entries.MomentEntries` (none without ``with_moments``, nor
+        with ``sums``; by ``tables`` and ``sums`` as `_chunk`'s)."""
         mom = self.moment_tables if tables is None else tables
         k = len(poses)
         o, b = np.zeros(k), np.zeros(k)
@@ -362,7 +358,7 @@ class ExactIntersector:
         rows, values = pose_volumes(
             np.ascontiguousarray(poses), self.hand_mesh, self.hand_tables, self.hand_grid,
             self.object_mesh, self.object_tables, self.object_grid, self.tiny, capacity,
-            o, b, c, st, mom if with_moments else EMPTY_MOMENTS, start,
+            o, b, c, st, mom if with_moments else EMPTY_MOMENTS, start, sums,
         )  # fmt: skip
         return o, b, c, st, entries_of.from_kernel(start, rows, values)
 
@@ -428,19 +424,21 @@ class ExactIntersector:
         flat[live] = shift_moments(flat[live], self.origin)
         return result.volumes, moments.reshape(*poses.shape[:-2], -1, 6)
 
-    def moment_entries(self, poses: np.ndarray, per_vertex: bool = False):
+    def moment_entries(self, poses: np.ndarray, tables=None, sums: tuple | None = None):
         """Volumes as `volumes` (k,) of poses (k, 4, 4), and the moments as
         `moment_entries.MomentEntries` of the k poses, in local coordinates (about `origin`,
-        the object moved by ``x -> R x + (R c + t - c)``, ``c`` the origin); ``per_vertex``
-        (with ``faces``): by `vertex_moment_tables`, each inside hand vertex of a part
-        classified vertex by vertex listing its marker instead of its edges' shares."""
-        tables = self.vertex_moment_tables if per_vertex else None
-        result, entries = self._run(poses, None, True, tables)
+        the object moved by ``x -> R x + (R c + t - c)``, ``c`` the origin), by ``tables``
+        (`moment_tables` where None, or `vertex_moment_tables`). With ``sums``
+        (`face_gradients.VertexTables` of ``tables``, out_a (k, n_a, 3), out_b (k, n_b, 3)):
+        summed onto the vertices into out_a and out_b instead, every row written (entries
+        are left only for the poses summed apart, `moment_entries.finish_sums`)."""
+        result, entries = self._run(poses, None, True, tables, sums)
         return result.volumes, entries
 
-    def _run(self, poses, progress, with_moments, tables=None):
+    def _run(self, poses, progress, with_moments, tables=None, sums=None):
         """`intersect`'s result, and the `moment_entries.MomentEntries` of the poses, flat
-        (local coordinates; none without ``with_moments``; by ``tables``, as `_chunk`)."""
+        (local coordinates; none without ``with_moments``; by ``tables``, as `_chunk`);
+        ``sums`` (tables, out_a, out_b): summed onto the vertices there, every row written."""
         t0 = time.perf_counter()
         # The same motions about the local origin c: x -> R x + (R c + t - c); repeats are
         # found there, so that their tolerance scales with the local geometry.
@@ -472,6 +470,7 @@ class ExactIntersector:
                 None if crossing is None else crossing[ix],
                 with_moments,
                 tables,
+                None if sums is None else (*sums, uniq[ix]),
             )
 
         def store(ix: np.ndarray, result: tuple) -> None:
@@ -489,10 +488,13 @@ class ExactIntersector:
                 for future in as_completed(futures):
                     store(parts[futures[future]], future.result())
         pairs = stats[:, [STAT_PAIRS, STAT_CROSSING]].sum(0)
+        entries = entries_of.concatenated(pieces, n)
+        if sums is not None:
+            entries_of.finish_sums(sums, entries, codes, uniq, back.reshape(-1))
         out, bounds, codes, stats = out[back], bounds[back], codes[back], stats[back]
         bounds += repeat_error(every, flat[back], self.areas, self.size)
         stats_out = call_stats(len(every), n, codes, stats, pairs, self.hand_tables, jobs, t0)
         shape = poses.shape[:-2]
         sources = POSE_SOURCES[codes].reshape(shape)
         result = Intersection(out.reshape(shape), bounds.reshape(shape), sources, stats_out)
-        return result, entries_of.taken(entries_of.concatenated(pieces, n), back.reshape(-1))
+        return result, entries_of.taken(entries, back.reshape(-1))

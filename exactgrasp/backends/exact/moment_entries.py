@@ -15,7 +15,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from exactgrasp.backends.exact.tables import MOMENT_COLUMNS, MomentTables
+from exactgrasp.backends.exact._entries import vertex_sums
+from exactgrasp.backends.exact.tables import CULLED, MOMENT_COLUMNS, MomentTables
 
 __all__ = [
     "MomentEntries",
@@ -23,6 +24,7 @@ __all__ = [
     "concatenated",
     "dense",
     "empty",
+    "finish_sums",
     "from_kernel",
     "placed",
     "spans",
@@ -127,3 +129,31 @@ def spans(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """The indices ``starts[i]`` to ``starts[i] + counts[i] - 1`` (int arrays (j,)), for each
     ``i`` in turn."""
     return np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+
+
+def finish_sums(
+    sums: tuple, entries: MomentEntries, codes: np.ndarray, first: np.ndarray, back: np.ndarray
+) -> None:
+    """The vertex derivatives of a call whose kernel summed them itself (`_kernel.pose_volumes`
+    with ``sums``): the rows it could not write, written.
+
+    Parameters
+    ----------
+    sums : (face_gradients.VertexTables, numpy.ndarray, numpy.ndarray)
+        The tables and ``out_a`` (k, n_a, 3), ``out_b`` (k, n_b, 3) of the call's k poses,
+        the kernel's rows written.
+    entries, codes : MomentEntries, numpy.ndarray (j,) int64
+        Of the j poses run (repeats run once): entries only where the kernel's rows were put
+        aside (the limit at an uncertain pose, the arrangement), and the poses' codes.
+    first, back : numpy.ndarray (j,) and (k,) int64
+        The row of each pose run (the first of its repeats), and the pose run at each row.
+    """
+    tables, out_a, out_b = sums
+    left = np.flatnonzero((codes == CULLED) | (entries.end > entries.begin))
+    if len(left):
+        a = np.empty((len(left), *out_a.shape[1:]))
+        b = np.empty((len(left), *out_b.shape[1:]))
+        vertex_sums(*taken(entries, left), tables, a, b)
+        out_a[first[left]], out_b[first[left]] = a, b
+    again = np.flatnonzero(first[back] != np.arange(len(back)))
+    out_a[again], out_b[again] = out_a[first[back[again]]], out_b[first[back[again]]]

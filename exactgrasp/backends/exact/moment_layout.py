@@ -182,12 +182,15 @@ def moment_layout(
     rows : int
         The moments' rows per pose.
     tables : tables.MomentTables
+    per_vertex : tables.MomentTables or None
+        With ``object_src``, ``tables`` with a marker per hand vertex too (`vertex_markers`).
     """
     if object_src is None:
-        return None, n_links, moment_tables(mesh, hand, hand_src[:, 0], n_links)
+        return None, n_links, moment_tables(mesh, hand, hand_src[:, 0], n_links), None
     m = len(hand_src)
     tables = moment_tables(mesh, hand, np.arange(m, dtype=np.int64), m, object_mesh, True)
-    return (hand_src, object_src), m + len(object_src), tables
+    sources = (hand_src, object_src)
+    return sources, m + len(object_src), tables, vertex_markers(tables, mesh, hand)
 
 
 def empty_moment_tables() -> MomentTables:
