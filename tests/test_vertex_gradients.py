@@ -274,6 +274,30 @@ def test_vertex_markers_stand_for_the_faces_rows_they_replace():
     assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
 
 
+def test_poses_the_kernel_does_not_sum_are_written_too():
+    # The kernel writes the rows of the poses it sums; a pose far away (culled, or of volume
+    # 0) and a repeated one are written after: every element, over NaNs here.
+    from exactgrasp.backends.exact.face_gradients import mesh_tables, vertex_gradients
+
+    grasp, poses = barrett_in("box", 4)
+    far = posed([0.0, 0.0, 0.0], [1.0, 0.0, 0.0])
+    poses = np.concatenate([poses, far[None], poses[1:2]])
+    A = grasp.hand.link_arrays()
+    B = [(grasp.object.vertices + grasp.object_pose[:3, 3], grasp.object.faces)]
+    x = ExactBackend(n_jobs=1).intersector_of(A, B, faces=True)
+    tables = mesh_tables(x, A, B)
+    out_a = np.full((len(poses), sum(len(V) for V, _ in A), 3), np.nan)
+    out_b = np.full((len(poses), len(B[0][0]), 3), np.nan)
+    volumes = vertex_gradients(x, tables, poses, out_a, out_b)
+    assert volumes[4] == 0.0 and volumes[1] > 0.0
+    assert not out_a[4].any() and not out_b[4].any()
+    np.testing.assert_array_equal(out_a[5], out_a[1])
+    np.testing.assert_array_equal(out_b[5], out_b[1])
+    r = eg.intersection_volume_gradients(grasp, poses=poses[:4], backend=ExactBackend(n_jobs=1))
+    np.testing.assert_array_equal(out_a[:4], r.grad_a)
+    assert np.abs(out_a[1]).max() > 0
+
+
 def test_poses_the_kernel_runs_again_give_the_same_derivatives():
     # A crossing buffer far too small: every pose is run again with a larger one
     # (`extrapolate`), its rows made dense there (the parts' markers expanded) and listed again.
