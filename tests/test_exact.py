@@ -158,6 +158,27 @@ def test_a_full_crossing_buffer_falls_back_to_the_boolean():
     assert result.stats["poses_limit"] == 0
 
 
+def test_crossing_records_grown_pose_by_pose_give_the_same_volumes(monkeypatch):
+    # The crossing records start small and double, up to the capacity, when a pose fills
+    # them (the pose is computed again): the same volumes to the bit, and a pose needing more
+    # than the capacity still goes to the limit.
+    from exactgrasp.backends.exact import _kernel
+
+    hand = [box([0, 0, 0], [1, 1, 1])]
+    obj = [sphere(0.3, np.zeros(3), 3)]
+    poses = np.tile(np.eye(4), (3, 1, 1))
+    poses[:, :3, 3] = [[0.9, 0.5, 0.5], [0.5, 0.9, 0.5], [0.5, 0.5, 0.5]]
+    want = ExactIntersector(hand, obj, broadphase=None).intersect(poses)
+    assert want.volumes.min() > 0 and want.stats["poses_limit"] == 0
+    monkeypatch.setattr(_kernel, "CROSSINGS", 2)
+    grown = ExactIntersector(hand, obj, broadphase=None).intersect(poses)
+    np.testing.assert_array_equal(grown.volumes, want.volumes)
+    np.testing.assert_array_equal(grown.volume_bounds, want.volume_bounds)
+    assert grown.stats["poses_limit"] == 0
+    small = ExactIntersector(hand, obj, broadphase=None, capacity=4).intersect(poses)
+    assert small.pose_sources.tolist()[:2] == ["limit", "limit"]
+
+
 def test_edges_passing_near_each_other_match_the_boolean():
     # An object edge passing within `gap` of a hand edge puts the ends of two faces' crossing
     # segments within rounding of each other: the floating-point decision on the planes'

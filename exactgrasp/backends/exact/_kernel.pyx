@@ -20,6 +20,7 @@ from exactgrasp.backends.exact._constants cimport (
     LENGTH_FLOOR,
     MOMENT_COLUMNS,
     OK,
+    OVERFLOW,
     POINT_COLUMNS,
     SEGMENT_COLUMNS,
     STAT_CROSSING,
@@ -57,6 +58,12 @@ from exactgrasp.geometry._minmax cimport max2
 PAIR_TABLE, SEED_ROWS = 2**14, 2**13
 #: Rows of moments a call's output holds at first, per pose (it grows when full).
 ROWS_PER_POSE = 64
+#: First size of the crossing records of each mesh (and of the scratch of edges crossed more
+#: than once); they double, up to the call's capacity, when a pose fills them (the pose is
+#: then computed again). Made at the capacity (400,000 by default: 19 MB a call) they were
+#: mostly never touched, but a call's freeing them let the allocator hand its memory back to
+#: the system, and the next call's arrays came back as fresh pages, faulted in one by one.
+CROSSINGS = 2**14
 
 
 cdef class _Call:
@@ -74,7 +81,7 @@ cdef class _Call:
     cdef int64_t[::1] slots
     cdef bint summing
     cdef object tuples
-    cdef int64_t cap, pairs, rows, attempt, token
+    cdef int64_t cap, pairs, rows, crossings, attempt, token
     cdef bint segs
     cdef double tiny, amax, bmax, hcell
     cdef double[:, ::1] R
@@ -93,7 +100,7 @@ cdef class _Call:
         self.hand_grid, self.object_grid = CellGrid(hand_grid), CellGrid(object_grid)
         self.mom = MomentTables(mom)
         self.tiny, self.cap = tiny, cap
-        self.pairs, self.rows = PAIR_TABLE, SEED_ROWS
+        self.pairs, self.rows, self.crossings = PAIR_TABLE, SEED_ROWS, min(cap, CROSSINGS)
         self.segs = self.mom.row_count[0] > 0
         self.attempt, self.token = 0, -1
         self.hcell = self.hand_grid.cell
@@ -105,7 +112,7 @@ cdef class _Call:
                 np.zeros(n_rows + 1, np.int64), np.zeros(2, np.int64),
             )
         )
-        self.scratch = PoseScratch(_scratch(*self.tuples, cap, self.workspace()))
+        self.scratch = PoseScratch(_scratch(*self.tuples, self.crossings, self.workspace()))
         # Bounds on every vertex's length (hand; object in its frame): the error bounds'
         # coordinate scale. The coordinates are local (about the hand's centre), so it
         # measures the geometry's size, not its position.
@@ -115,7 +122,7 @@ cdef class _Call:
     cdef Workspace workspace(self):
         """The search's scratch arrays (`tables.Workspace`) at the current sizes."""
         hand_mesh, hand, hand_grid, object_mesh, _, object_grid = self.tuples
-        cap, pairs = self.cap, self.pairs
+        cap, pairs = self.crossings, self.pairs
         acs, bcs = hand_grid.cell_start, object_grid.cell_start
         longest = max(1, np.max(np.diff(acs)), np.max(np.diff(bcs)))
         return Workspace(
@@ -134,7 +141,7 @@ cdef class _Call:
 
 
 def _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, work):
-    """The per-pose scratch arrays (`tables.PoseScratch`), ``cap`` crossings per mesh, around
+    """The per-pose scratch arrays (`tables.PoseScratch`), ``cap`` crossings, around
     the search's ``work`` (a compiled `Workspace`, which `PoseScratch` takes as it is)."""
     na, nb = hand_mesh.vertices.shape[0], object_mesh.vertices.shape[0]
     ma, mb = hand_mesh.faces.shape[0], object_mesh.faces.shape[0]
@@ -151,8 +158,9 @@ def _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, wor
 cdef (double, double, int64_t, int64_t, int64_t) _search(_Call c, double gscale, double gb,
                                                         double ferr):
     """Stages "seeds" and "pairs" of the current pose: (segment sum, its error bound,
-    crossings, pairs evaluated, code). A pose whose pair table or seed buffer fills up is
-    searched again with both grown (the GIL is taken only for that)."""
+    crossings, pairs evaluated, code). A pose whose pair table, seed buffer or crossing
+    records (below the capacity) fill up is searched again with the full one grown (the GIL
+    is taken only for that)."""
     cdef int64_t nseeds
     cdef double seg = 0.0, segerr = 0.0
     cdef int64_t ncross = 0, npairs = 0, code = OK
@@ -179,11 +187,14 @@ cdef (double, double, int64_t, int64_t, int64_t) _search(_Call c, double gscale,
                     c.scratch.object_D, c.scratch.object_N, c.scratch.work, nseeds, gscale, gb,
                     c.hcell, c.attempt,
                 )
-                if code != GROW:
+                if code != GROW and not (code == OVERFLOW and c.crossings < c.cap):
                     return seg, segerr, ncross, npairs, code
         # A table was too small: the pose starts again with larger ones.
         if nseeds < 0:
             c.rows *= 2
+        elif code == OVERFLOW:
+            c.crossings = min(2 * c.crossings, c.cap)
+            c.scratch.multi = np.empty(c.crossings, np.int64)
         else:
             c.pairs *= 2
         clear_records(c.scratch.work)

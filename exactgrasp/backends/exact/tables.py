@@ -412,7 +412,8 @@ class PoseScratch(NamedTuple):
     uniform: np.ndarray
     #: (max(hand n, object n),) int64: the breadth-first queue of the status walks.
     queue: np.ndarray
-    #: (capacity,) int64: the records of edges crossed more than once (`_sums.crossed_sum`).
+    #: (r,) int64: the records of edges crossed more than once (`_sums.crossed_sum`); as long
+    #: as the crossing records (`Workspace`), which grow up to the capacity.
     multi: np.ndarray
     #: (3,) float64: a hand vertex in the object's frame, for a point test.
     point: np.ndarray
