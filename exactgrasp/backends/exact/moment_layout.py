@@ -144,10 +144,12 @@ def vertex_markers(tables: MomentTables, mesh, hand) -> MomentTables:
     low = np.concatenate([E[:, 0], E[:, 0]])
     face = tables.edge_links.T.reshape(-1)
     vals = np.concatenate([tables.edge_moments[:, :6], tables.edge_moments[:, 6:]])
-    part_of = np.searchsorted(hand.parts[:, 1], low, side="right") - 1
-    # Each share twice: in its lower vertex's part's group and in that vertex's own group.
-    keys = np.concatenate([part_of, nparts + low]) * faces + np.concatenate([face, face])
-    start, link, sums = _grouped(keys, np.concatenate([vals, vals]), faces, nparts + n)
+    # Each share in its lower vertex's group, after the parts' groups (each share in its
+    # lower vertex's part's, `moment_tables`).
+    vstart, vlink, vsums = _grouped(low * faces + face, vals, faces, n)
+    start = np.concatenate([tables.part_start, tables.part_start[-1] + vstart[1:]])
+    link = np.concatenate([tables.part_link, vlink])
+    sums = np.concatenate([tables.part_moments, vsums])
     return tables._replace(
         vertex_link=np.arange(rows + nparts, rows + nparts + n, dtype=np.int64),
         vertex_moments=np.zeros((n, 6)),
