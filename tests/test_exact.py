@@ -474,7 +474,6 @@ def test_real_spray_bottle_grasp_matches_plain_boolean():
 def test_ray_status_agrees_with_winding_number():
     """The exact point test used for shells with no classified vertex (`ray_status`)."""
     from exactgrasp.backends.exact._stages import ray_status
-
     from exactgrasp.backends.exact.grids import build_grid
     from exactgrasp.geometry.winding import winding_number
 

@@ -13,12 +13,16 @@ bytes.
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from exactgrasp.backends._builds import cpu_has_avx2
+from exactgrasp.backends.exact import intersector
 
 HERE = Path(__file__).resolve().parent / "kernel_goldens"
 GOLDEN = dict(np.load(HERE / "numba_exact.npz"))
@@ -60,8 +64,23 @@ def test_the_goldens_are_not_trivial():
     assert len(LABELS) - len(GOLDEN["refused"]) == 377
 
 
+def builds() -> list[str]:
+    """The exact kernel's compiled builds here: the baseline one and, on an x86-64 CPU with
+    AVX2, the AVX2 one (`exactgrasp.backends._builds`)."""
+    names = ["exactgrasp.backends.exact._kernel"]
+    if cpu_has_avx2() and importlib.util.find_spec(names[0] + "_avx2") is not None:
+        names.append(names[0] + "_avx2")
+    return names
+
+
+def test_the_intersector_runs_the_fastest_build():
+    assert intersector.pose_volumes is importlib.import_module(builds()[-1]).pose_volumes
+
+
+@pytest.mark.parametrize("build", builds())
 @pytest.mark.parametrize("chunk", range(8))
-def test_the_compiled_kernel_gives_numbas_bits(chunk):
+def test_the_compiled_kernel_gives_numbas_bits(chunk, build, monkeypatch):
+    monkeypatch.setattr(intersector, "pose_volumes", importlib.import_module(build).pose_volumes)
     bad = {}
     for scene in SCENES[chunk::8]:
         label = scene[0]

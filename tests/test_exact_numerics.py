@@ -182,7 +182,6 @@ def test_hand_vertex_near_a_cell_boundary_is_unknown_when_the_inverse_errs_more(
     # Hand vertices reach the object's grid through R^T, which errs by R's departure from a
     # rotation: a vertex that close to a surface cell may truly lie in it.
     from exactgrasp.backends.exact._stages import hand_statuses
-
     from exactgrasp.backends.exact.grids import build_grid
     from exactgrasp.backends.exact.tolerances import GRID_MARGIN
 

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from exactgrasp.backends._builds import cpu_has_avx2
 from exactgrasp.backends.voxel.kernel import count_inside
 from exactgrasp.backends.voxel.points import dart_throw
 from exactgrasp.geometry.winding import (
@@ -117,7 +118,7 @@ def variants() -> list:
     except ImportError:  # no compiled build here: the one variant `kernel` picked
         return found
     found.append(_kernel.count_inside)
-    if _kernel.cpu_has_avx2():
+    if cpu_has_avx2():
         from exactgrasp.backends.voxel import _kernel_avx2
 
         found.append(_kernel_avx2.count_inside)

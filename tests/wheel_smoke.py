@@ -27,12 +27,23 @@ SUM, NONZERO, LARGEST = 254.50508652741135, 3942, 0.3229725732911827
 def main() -> int:
     start = time.perf_counter()
     import exactgrasp as eg
-    from exactgrasp.backends.exact import _entries, _stages, _tables
+    from exactgrasp.backends import _builds
+    from exactgrasp.backends.exact import _entries, _stages, _tables, intersector
     from exactgrasp.backends.exact import _kernel as exact_kernel
     from exactgrasp.backends.voxel import _kernel, _points, kernel
     from exactgrasp.geometry import _crossings, _winding
 
-    compiled = (_kernel, _points, _winding, _crossings, exact_kernel, _entries, _stages, _tables)
+    compiled = (
+        _kernel,
+        _points,
+        _winding,
+        _crossings,
+        exact_kernel,
+        _entries,
+        _stages,
+        _tables,
+        _builds,
+    )
     for module in compiled:
         path = Path(module.__file__)
         assert path.suffix in (".so", ".pyd"), path
@@ -58,7 +69,8 @@ def main() -> int:
     seconds = time.perf_counter() - start
     print(f"ok: exactgrasp {eg.__version__} from {Path(eg.__file__).parent}, ", end="")
     print(f"descriptor {values.shape}, sum {values.sum():.12g}, {seconds:.1f} s in all, ", end="")
-    print(f"counting kernel {kernel.count_inside.__module__}")
+    print(f"counting kernel {kernel.count_inside.__module__}, ", end="")
+    print(f"exact kernel {intersector.pose_volumes.__module__}")
     return 0
 
 

@@ -32,9 +32,9 @@ from typing import Any
 import numpy as np
 
 from exactgrasp.backends import defaults
+from exactgrasp.backends._builds import fastest_build
 from exactgrasp.backends.base import repeat_error, repeated_poses, resolve_jobs
 from exactgrasp.backends.exact import moment_entries as entries_of
-from exactgrasp.backends.exact._kernel import pose_volumes
 from exactgrasp.backends.exact.arranged import (
     arranged_moments,
     arranged_volume,
@@ -77,6 +77,8 @@ from exactgrasp.backends.exact.tolerances import CULL_GAP, LENGTH_FLOOR, TINY_FA
 from exactgrasp.geometry.bvh import MeshPair
 from exactgrasp.geometry.manifold import mesh_arrays, union_solids
 
+#: The exact kernel (``_kernel.pyx``) in the build this CPU runs fastest (`fastest_build`).
+pose_volumes = fastest_build("exactgrasp.backends.exact._kernel").pose_volumes
 #: Pieces per thread the distinct poses of a call are dealt into (interleaved, taken by
 #: whichever thread is free): they balance threads that run at different speeds and pace
 #: the progress callback, at the price of one kernel call each.

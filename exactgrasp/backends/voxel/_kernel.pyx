@@ -10,8 +10,8 @@ typed memoryviews and counts its poses without the GIL (threads count different 
 once); the stages inside take plain pointers, gathered in `Points`, `Hand` and `Scratch`.
 
 ``_kernel_avx2.pyx`` compiles this same source for x86-64 CPUs with AVX2, where the leaves'
-loops vectorise 4 wide; `cpu_has_avx2` tells `kernel` which of the two to use. The results
-are the same: no multiply-add is fused and no sum reordered in either.
+loops vectorise 4 wide; `kernel` picks the one this CPU runs (`exactgrasp.backends._builds`).
+The results are the same: no multiply-add is fused and no sum reordered in either.
 """
 
 import numpy as np
@@ -20,19 +20,6 @@ from libc.math cimport fabs, nextafter
 from libc.stdint cimport int32_t, int64_t, uint8_t, uint64_t
 
 from exactgrasp.geometry._minmax cimport max2, min2
-
-cdef extern from *:
-    """
-    #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
-    static int exactgrasp_has_avx2(void) {
-        __builtin_cpu_init();
-        return __builtin_cpu_supports("avx2");
-    }
-    #else
-    static int exactgrasp_has_avx2(void) { return 0; }
-    #endif
-    """
-    int exactgrasp_has_avx2() nogil
 
 # Output pointers that alias nothing else in the leaf's loops: without `restrict` GCC cannot
 # vectorise the loop that moves the points.
@@ -43,18 +30,6 @@ cdef extern from *:
     """
     ctypedef double* double_out "exactgrasp_double_out"
     ctypedef int32_t* int32_out "exactgrasp_int32_out"
-
-
-def cpu_has_avx2():
-    """Whether this CPU, and its operating system, run AVX2 code.
-
-    Returns
-    -------
-    bool
-        True on an x86-64 CPU with AVX2 enabled (checked by the compiler's CPU detection,
-        which also asks the operating system), False elsewhere.
-    """
-    return bool(exactgrasp_has_avx2())
 
 
 # Every moved point lies within its box's moved bounds up to rounding, a few units in the last

@@ -19,8 +19,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
+from exactgrasp.backends._builds import fastest_build
 from exactgrasp.backends.base import check_poses, resolve_jobs
-from exactgrasp.backends.voxel import _kernel
 from exactgrasp.backends.voxel.grids import HandOccupancy
 from exactgrasp.backends.voxel.points import ObjectPoints
 
@@ -35,21 +35,10 @@ __all__ = [
 ]
 
 
-def _counting_kernel():
-    """``count_inside`` of ``_kernel_avx2`` where the CPU runs AVX2 and the package was built
-    with it (x86-64), else of ``_kernel``: the same source and the same counts."""
-    if _kernel.cpu_has_avx2():
-        try:
-            from exactgrasp.backends.voxel._kernel_avx2 import count_inside as avx2
-        except ImportError:  # built for a CPU family without the AVX2 variant
-            return _kernel.count_inside
-        return avx2
-    return _kernel.count_inside
-
-
-#: The counting kernel this CPU runs (`_counting_kernel`); see ``_kernel.pyx`` for its
-#: arguments.
-count_inside = _counting_kernel()
+#: The counting kernel this CPU runs: ``count_inside`` of ``_kernel_avx2`` where the CPU runs
+#: AVX2 and the package was built with it (x86-64), else of ``_kernel`` (the same source and
+#: the same counts; `exactgrasp.backends._builds`). See ``_kernel.pyx`` for its arguments.
+count_inside = fastest_build("exactgrasp.backends.voxel._kernel").count_inside
 
 # Poses a thread takes at a time: enough that taking one costs little, few enough that the
 # threads finish together.
