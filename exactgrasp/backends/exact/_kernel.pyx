@@ -64,6 +64,11 @@ ROWS_PER_POSE = 64
 #: mostly never touched, but a call's freeing them let the allocator hand its memory back to
 #: the system, and the next call's arrays came back as fresh pages, faulted in one by one.
 CROSSINGS = 2**14
+# Which table a pose filled (`_search`, `_Call.grow`).
+cdef enum:
+    FULL_SEEDS = 1
+    FULL_CROSSINGS = 2
+    FULL_PAIRS = 3
 
 
 cdef class _Call:
@@ -82,6 +87,7 @@ cdef class _Call:
     cdef bint summing
     cdef object tuples
     cdef int64_t cap, pairs, rows, crossings, attempt, token
+    cdef int64_t full
     cdef bint segs
     cdef double tiny, amax, bmax, hcell
     cdef double[:, ::1] R
@@ -119,6 +125,20 @@ cdef class _Call:
         self.amax = max2(vertex_bound(self.hand_mesh.vertices), LENGTH_FLOOR)
         self.bmax = vertex_bound(self.object_mesh.vertices)
 
+    cdef int grow(self) except -1:
+        """The table the pose filled (``full``, `_search`) made larger: the seed buffer or the
+        pair table twice as large, the crossing records twice as large up to the capacity."""
+        if self.full == FULL_SEEDS:
+            self.rows *= 2
+        elif self.full == FULL_CROSSINGS:
+            self.crossings = min(2 * self.crossings, self.cap)
+            self.scratch.multi = np.empty(self.crossings, np.int64)
+        else:
+            self.pairs *= 2
+        clear_records(self.scratch.work)
+        self.scratch.work = self.workspace()
+        return 0
+
     cdef Workspace workspace(self):
         """The search's scratch arrays (`tables.Workspace`) at the current sizes."""
         hand_mesh, hand, hand_grid, object_mesh, _, object_grid = self.tuples
@@ -155,50 +175,43 @@ def _scratch(hand_mesh, hand, hand_grid, object_mesh, obj, object_grid, cap, wor
     )
 
 
-cdef (double, double, int64_t, int64_t, int64_t) _search(_Call c, double gscale, double gb,
-                                                        double ferr):
-    """Stages "seeds" and "pairs" of the current pose: (segment sum, its error bound,
-    crossings, pairs evaluated, code). A pose whose pair table, seed buffer or crossing
-    records (below the capacity) fill up is searched again with the full one grown (the GIL
-    is taken only for that)."""
-    cdef int64_t nseeds
-    cdef double seg = 0.0, segerr = 0.0
-    cdef int64_t ncross = 0, npairs = 0, code = OK
-    while True:
-        with nogil:
-            c.attempt += 1
-            if c.attempt >= 2**30:
-                # The pair table's tags would overflow: start them again.
-                c.scratch.work.pair_tags[:] = 0
-                c.attempt = 1
-            clear_records(c.scratch.work)
-            nseeds = object_edge_seeds(
-                c.object_mesh, c.obj, c.hand, c.hand_grid, c.scratch.object_V, c.scratch.near,
-                gscale, c.scratch.work, 0,
-            )
-            if nseeds >= 0:
-                nseeds = cotree_seeds(
-                    c.hand_mesh, c.hand, c.obj, c.object_grid, c.R, c.t, c.scratch.near_cotree,
-                    gscale, ferr, c.hcell, c.scratch.work, nseeds,
-                )
-            if nseeds >= 0:
-                seg, segerr, ncross, npairs, code = trace_pairs(
-                    c.hand_mesh, c.hand, c.object_mesh, c.obj, c.scratch.object_V,
-                    c.scratch.object_D, c.scratch.object_N, c.scratch.work, nseeds, gscale, gb,
-                    c.hcell, c.attempt,
-                )
-                if code != GROW and not (code == OVERFLOW and c.crossings < c.cap):
-                    return seg, segerr, ncross, npairs, code
-        # A table was too small: the pose starts again with larger ones.
-        if nseeds < 0:
-            c.rows *= 2
-        elif code == OVERFLOW:
-            c.crossings = min(2 * c.crossings, c.cap)
-            c.scratch.multi = np.empty(c.crossings, np.int64)
-        else:
-            c.pairs *= 2
-        clear_records(c.scratch.work)
-        c.scratch.work = c.workspace()
+cdef inline (double, double, int64_t, int64_t, int64_t) _search(
+    _Call c, double gscale, double gb, double ferr
+) noexcept nogil:
+    """Stages "seeds" and "pairs" of the current pose, once: (segment sum, its error bound,
+    crossings, pairs evaluated, code). The code is `GROW` where the seed buffer, the crossing
+    records (below the capacity) or the pair table filled up (``c.full`` says which): the pose
+    is searched again after `_Call.grow`."""
+    cdef int64_t nseeds, code
+    cdef (double, double, int64_t, int64_t, int64_t) traced
+    c.attempt += 1
+    if c.attempt >= 2**30:
+        # The pair table's tags would overflow: start them again.
+        c.scratch.work.pair_tags[:] = 0
+        c.attempt = 1
+    clear_records(c.scratch.work)
+    nseeds = object_edge_seeds(
+        c.object_mesh, c.obj, c.hand, c.hand_grid, c.scratch.object_V, c.scratch.near,
+        gscale, c.scratch.work, 0,
+    )
+    if nseeds >= 0:
+        nseeds = cotree_seeds(
+            c.hand_mesh, c.hand, c.obj, c.object_grid, c.R, c.t, c.scratch.near_cotree,
+            gscale, ferr, c.hcell, c.scratch.work, nseeds,
+        )
+    if nseeds < 0:
+        c.full = FULL_SEEDS
+        return 0.0, 0.0, 0, 0, GROW
+    traced = trace_pairs(
+        c.hand_mesh, c.hand, c.object_mesh, c.obj, c.scratch.object_V, c.scratch.object_D,
+        c.scratch.object_N, c.scratch.work, nseeds, gscale, gb, c.hcell, c.attempt,
+    )
+    code = traced[4]
+    if code == OVERFLOW and c.crossings < c.cap:
+        c.full = FULL_CROSSINGS
+        return 0.0, 0.0, 0, 0, GROW
+    c.full = FULL_PAIRS
+    return traced
 
 
 cdef class _Entries:
@@ -212,19 +225,25 @@ cdef class _Entries:
         self.rows, self.values = np.empty(first, np.int64), np.empty((first, MOMENT_COLUMNS))
         self.n = 0
 
-    cdef void add(self, MomentRows G, int64_t done, int64_t poses):
-        """The rows pose number ``done`` (from 1) touched, appended (`_pose.copy_rows`); when
-        full, new arrays long enough for all ``poses`` at 5/4 of the rate so far, and at least
-        twice as long."""
-        cdef int64_t count = G.state[0], size
-        if self.n + count > self.rows.shape[0]:
-            size = max(2 * self.rows.shape[0], (self.n + count) * poses * 5 // (4 * done) + count)
-            rows, values = np.empty(size, np.int64), np.empty((size, MOMENT_COLUMNS))
-            rows[: self.n] = self.rows[: self.n]
-            values[: self.n] = self.values[: self.n]
-            self.rows, self.values = rows, values
-        with nogil:
-            self.n = copy_rows(G, self.rows, self.values, self.n)
+    cdef int add(self, MomentRows G, int64_t done, int64_t poses) except -1 nogil:
+        """The rows pose number ``done`` (from 1) touched, appended (`_pose.copy_rows`); the
+        GIL is taken only to grow the arrays (`_grow`)."""
+        if self.n + G.state[0] > self.rows.shape[0]:
+            with gil:
+                self._grow(G.state[0], done, poses)
+        self.n = copy_rows(G, self.rows, self.values, self.n)
+        return 0
+
+    cdef int _grow(self, int64_t count, int64_t done, int64_t poses) except -1:
+        """New arrays long enough for all ``poses`` at 5/4 of the rate so far, and at least
+        twice as long, holding the ``n`` entries so far."""
+        cdef int64_t size
+        size = max(2 * self.rows.shape[0], (self.n + count) * poses * 5 // (4 * done) + count)
+        rows, values = np.empty(size, np.int64), np.empty((size, MOMENT_COLUMNS))
+        rows[: self.n] = self.rows[: self.n]
+        values[: self.n] = self.values[: self.n]
+        self.rows, self.values = rows, values
+        return 0
 
 
 def pose_volumes(
@@ -282,9 +301,10 @@ def pose_volumes(
     )
     cdef Py_ssize_t ip
     moment_start[0] = 0
-    for ip in range(k):
-        _one_pose(c, poses, ip, out, bounds, codes, stats, entries)
-        moment_start[ip + 1] = entries.n
+    with nogil:
+        for ip in range(k):
+            _one_pose(c, poses, ip, out, bounds, codes, stats, entries)
+            moment_start[ip + 1] = entries.n
     return np.asarray(entries.rows)[: entries.n], np.asarray(entries.values)[: entries.n]
 
 
@@ -300,49 +320,50 @@ cdef inline void _take_pose(
             R[a, b] = poses[ip, a, b]
 
 
-cdef void _one_pose(
+cdef int _one_pose(
     _Call c, const double[:, :, ::1] poses, Py_ssize_t ip, double[::1] out,
     double[::1] bounds, int64_t[::1] codes, int64_t[:, ::1] stats, _Entries entries,
-):
-    """Pose ``ip``: its volume, bound, code, statistics and, where asked, moments."""
+) except -1 nogil:
+    """Pose ``ip``: its volume, bound, code, statistics and, where asked, moments. The GIL is
+    taken only to grow a table the pose filled, or the moment entries."""
     cdef double gb, gscale, ferr, seg, segerr, bound, vol = 0.0
     cdef int64_t ncross, npairs, code
-    with nogil:
-        _take_pose(poses, ip, c.R, c.t)
-        gb = move_object(
-            c.R, c.t, c.object_mesh.vertices, c.object_mesh.faces, c.tiny, c.bmax,
-            c.scratch.object_V, c.scratch.object_D, c.scratch.object_N,
-        )
-        gscale = max2(c.amax, gb)
-        ferr = near_pass(
-            c.R, c.t, gscale, c.hand, c.hand_grid, c.obj, c.object_grid, c.scratch
-        )
+    _take_pose(poses, ip, c.R, c.t)
+    gb = move_object(
+        c.R, c.t, c.object_mesh.vertices, c.object_mesh.faces, c.tiny, c.bmax,
+        c.scratch.object_V, c.scratch.object_D, c.scratch.object_N,
+    )
+    gscale = max2(c.amax, gb)
+    ferr = near_pass(c.R, c.t, gscale, c.hand, c.hand_grid, c.obj, c.object_grid, c.scratch)
     seg, segerr, ncross, npairs, code = _search(c, gscale, gb, ferr)
-    with nogil:
-        # After the pairs: the parts whose own edges nothing crosses are classified whole.
-        code, c.token = classify_vertices(
-            c.R, c.t, c.hand_mesh, c.hand, c.object_mesh, c.obj, c.hand_grid, c.object_grid,
-            c.scratch, code, c.token, ferr,
+    while code == GROW:
+        with gil:
+            c.grow()
+        seg, segerr, ncross, npairs, code = _search(c, gscale, gb, ferr)
+    # After the pairs: the parts whose own edges nothing crosses are classified whole.
+    code, c.token = classify_vertices(
+        c.R, c.t, c.hand_mesh, c.hand, c.object_mesh, c.obj, c.hand_grid, c.object_grid,
+        c.scratch, code, c.token, ferr,
+    )
+    if code == OK:
+        vol, bound, code = volume_sum(
+            c.hand_mesh, c.hand, c.object_mesh, c.obj, c.scratch, seg, segerr, gscale, gb
         )
-        if code == OK:
-            vol, bound, code = volume_sum(
-                c.hand_mesh, c.hand, c.object_mesh, c.obj, c.scratch, seg, segerr, gscale, gb
+        out[ip] = vol
+        bounds[ip] = bound
+        if code == OK and vol > 0.0 and c.segs:
+            c.G.state[1] = ip
+            pose_moments(
+                c.R, c.t, c.hand_mesh, c.hand, c.object_mesh, c.mom, c.scratch, ncross, c.G
             )
-            out[ip] = vol
-            bounds[ip] = bound
-            if code == OK and vol > 0.0 and c.segs:
-                c.G.state[1] = ip
-                pose_moments(
-                    c.R, c.t, c.hand_mesh, c.hand, c.object_mesh, c.mom, c.scratch, ncross,
-                    c.G,
-                )
-        if c.summing:
-            zero_pose(c.out_a, c.out_b, c.slots[ip])
-            if code == OK and vol > 0.0 and c.segs:
-                pose_sums(c.G, c.sums, c.out_a, c.out_b, c.slots[ip])
-    if code == OK and vol > 0.0 and c.segs and not c.summing:
+    if c.summing:
+        zero_pose(c.out_a, c.out_b, c.slots[ip])
+        if code == OK and vol > 0.0 and c.segs:
+            pose_sums(c.G, c.sums, c.out_a, c.out_b, c.slots[ip])
+    elif code == OK and vol > 0.0 and c.segs:
         entries.add(c.G, ip + 1, poses.shape[0])
     codes[ip] = code
     stats[ip, STAT_PAIRS] = npairs
     stats[ip, STAT_CROSSING] = ncross
     cell_stats(stats, ip, c.hand.parts, c.scratch.uniform, c.scratch.hand_status)
+    return 0
