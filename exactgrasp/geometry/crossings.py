@@ -20,7 +20,7 @@ import numpy as np
 
 from exactgrasp.geometry._crossings import fill_cells, pair_scan
 
-__all__ = ["CROSS", "NO", "UNSURE", "find_contacts", "find_crossings"]
+__all__ = ["CROSS", "NO", "UNSURE", "find_contacts", "find_contacts_near", "find_crossings"]
 
 #: Result codes of a pair test: certainly apart, certainly crossing, or uncertain (the
 #: kernels' own, ``_pair_tests.pxd``).
@@ -131,3 +131,50 @@ def find_contacts(
     label = np.zeros(len(faces), np.int64)
     t, u, _, _ = _scan(vertices, faces, label, identity, True, True)
     return t, u
+
+
+def find_contacts_near(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    identity: np.ndarray,
+    first: int,
+    known: tuple[np.ndarray, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs `find_contacts` gives, where those among ``faces[:first]`` are known: only
+    the pairs with a face from ``first`` on are searched, among those faces and the earlier
+    ones whose bounding boxes meet theirs (a pair that may meet has boxes that meet).
+
+    Parameters
+    ----------
+    vertices, faces, identity
+        As `find_contacts`.
+    first : int
+        The faces from this one on are searched against all.
+    known : (numpy.ndarray, numpy.ndarray), shape (k,) int64 each
+        `find_contacts` of ``faces[:first]`` alone, with the same identities among their
+        corners (a pair's test reads only its two triangles and which corners are one point).
+
+    Returns
+    -------
+    t, u : numpy.ndarray, shape (k,), int64
+        The same pairs as `find_contacts`, each with ``t < u``, sorted by ``t`` then ``u``.
+    """
+    V = np.ascontiguousarray(vertices, dtype=np.float64)
+    F = np.ascontiguousarray(faces, dtype=np.int64)
+    corners = V[F]
+    lo, hi = corners.min(1), corners.max(1)
+    if first < len(F):
+        low, high = lo[first:].min(0), hi[first:].max(0)
+        near = np.flatnonzero(np.all((lo[:first] <= high) & (hi[:first] >= low), axis=1))
+    else:
+        near = np.empty(0, np.int64)
+    searched = np.concatenate([near, np.arange(first, len(F))])
+    label = np.zeros(len(searched), np.int64)
+    t, u, _, _ = _scan(V, F[searched], label, identity, True, True)
+    t, u = searched[t], searched[u]
+    new = (t >= first) | (u >= first)
+    t = np.concatenate([np.asarray(known[0], np.int64), t[new]])
+    u = np.concatenate([np.asarray(known[1], np.int64), u[new]])
+    t, u = np.minimum(t, u), np.maximum(t, u)
+    order = np.lexsort((u, t))
+    return t[order], u[order]

@@ -329,7 +329,7 @@ class Arrangement:
         return True
 
 
-def cut_exactly(vertices: np.ndarray, faces: np.ndarray):
+def cut_exactly(vertices: np.ndarray, faces: np.ndarray, pairs=None):
     """The arrangement of a closed surface: its triangles cut along every contact, exactly.
 
     Parameters
@@ -337,6 +337,9 @@ def cut_exactly(vertices: np.ndarray, faces: np.ndarray):
     vertices : numpy.ndarray, shape (n, 3), float64
         Distinct points (welded: equal coordinates are one vertex).
     faces : numpy.ndarray, shape (m, 3), int64
+    pairs : (numpy.ndarray, numpy.ndarray), shape (k,) int64 each, optional
+        The pairs of faces that may meet, found already (`crossings.find_contacts_near`);
+        by default `crossings.find_contacts` finds them.
 
     Returns
     -------
@@ -353,7 +356,7 @@ def cut_exactly(vertices: np.ndarray, faces: np.ndarray):
     """
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
-    t, u = find_contacts(V, F, np.arange(len(V)))
+    t, u = find_contacts(V, F, np.arange(len(V))) if pairs is None else pairs
     in_contact = np.unique(np.concatenate([t, u]))
     cut = Arrangement(V, F, np.unique(F[in_contact]))
     for a, b in zip(t.tolist(), u.tolist(), strict=True):

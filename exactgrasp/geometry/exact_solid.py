@@ -33,6 +33,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from exactgrasp.errors import MeshError
+from exactgrasp.geometry.crossings import find_contacts_near
 from exactgrasp.geometry.exact_cut import Arrangement, cut_exactly
 from exactgrasp.geometry.rational import centroid, orient2d, plane_of, side, triple
 from exactgrasp.geometry.topology import edge_defects, format_point
@@ -177,7 +178,7 @@ def _levels(cut, faces, counts, patch, n_patch) -> np.ndarray:
     return levels
 
 
-def winding_regions(vertices: np.ndarray, faces: np.ndarray):
+def winding_regions(vertices: np.ndarray, faces: np.ndarray, known=None):
     """A closed surface cut along every contact, its faces with the winding numbers on their
     two sides, exactly.
 
@@ -186,6 +187,10 @@ def winding_regions(vertices: np.ndarray, faces: np.ndarray):
     vertices : numpy.ndarray, shape (n, 3), float64
     faces : numpy.ndarray, shape (m, 3), int64
         A closed surface: every edge used as often in each direction.
+    known : (int, numpy.ndarray, numpy.ndarray), optional
+        ``(first, t, u)``: the pairs of ``faces[:first]`` that may meet, found already on
+        those faces with their vertices welded alone (`crossings.find_contacts_near`); by
+        default every pair is searched.
 
     Returns
     -------
@@ -208,7 +213,10 @@ def winding_regions(vertices: np.ndarray, faces: np.ndarray):
     V = np.asarray(vertices, dtype=np.float64)
     welded, inverse = np.unique(V, axis=0, return_inverse=True)
     F = inverse.reshape(-1)[np.asarray(faces, dtype=np.int64)]
-    cut, tiles, tiled, n_cut = cut_exactly(welded, F)
+    pairs = None
+    if known is not None:
+        pairs = find_contacts_near(welded, F, np.arange(len(welded)), known[0], known[1:])
+    cut, tiles, tiled, n_cut = cut_exactly(welded, F, pairs)
     G, counts, sources, alone = _merged(tiles)
     G = np.concatenate([F[~tiled], G])
     sources = np.concatenate([np.flatnonzero(~tiled), sources])

@@ -42,7 +42,7 @@ class LevelSet:
     sources: np.ndarray
 
 
-def level_set(vertices: np.ndarray, faces: np.ndarray, level: int) -> LevelSet:
+def level_set(vertices: np.ndarray, faces: np.ndarray, level: int, known=None) -> LevelSet:
     """The points where a closed surface's winding number is at least ``level`` (>= 1).
 
     Parameters
@@ -51,12 +51,14 @@ def level_set(vertices: np.ndarray, faces: np.ndarray, level: int) -> LevelSet:
     faces : numpy.ndarray, shape (m, 3), int64
         A closed surface: every edge used as often in each direction.
     level : int
+    known : (int, numpy.ndarray, numpy.ndarray), optional
+        Pairs of faces that may meet, found already (`exact_solid.winding_regions`).
 
     Returns
     -------
     LevelSet
     """
-    cut, G, sources, patch, levels, _, _ = winding_regions(vertices, faces)
+    cut, G, sources, patch, levels, _, _ = winding_regions(vertices, faces, known)
     inside = levels >= level
     face_sign = (inside[:, 0].astype(np.int64) - inside[:, 1].astype(np.int64))[patch]
     kept = np.flatnonzero(face_sign)

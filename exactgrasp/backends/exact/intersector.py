@@ -36,8 +36,8 @@ from exactgrasp.backends._builds import fastest_build
 from exactgrasp.backends.base import repeat_error, repeated_poses, resolve_jobs
 from exactgrasp.backends.exact import moment_entries as entries_of
 from exactgrasp.backends.exact.arranged import (
+    ArrangedHand,
     arranged_moments,
-    arranged_volume,
     scene_rounding,
     shift_rounding,
 )
@@ -153,8 +153,8 @@ class ExactIntersector:
         test leaves open (`culling.worth_building`), and always None without a broad phase.
         Culling never changes a result.
     areas : float
-        Both unions' surface areas, summed (in the bound of `extrapolate`, and of the boolean
-        reference in `gradients.boolean_volume_moments`).
+        Both unions' surface areas, summed (the bounds of `extrapolate` and of
+        `gradients.boolean_volume_moments`). ``arranged``: the exact fallback's hand.
     face_sources : (numpy.ndarray (m, 2), numpy.ndarray (m_o, 2)) or None
         With ``faces``: the (link, input face) of each hand face in the kernel's order, and
         the (body, face) of each object face. ``moment_rows``: the moments' rows per pose.
@@ -246,6 +246,7 @@ class ExactIntersector:
             "capacity": self.capacity,
         }
         self.areas = float(self.hand_solid.surface_area() + self.object_solid.surface_area())
+        self.arranged = ArrangedHand(self.hand_mesh.vertices, self.hand_mesh.faces)
 
     def broad_phase(self, poses: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
         """What the broad phase knows of poses (k, 4, 4; local coordinates) before the kernel.
@@ -336,10 +337,9 @@ class ExactIntersector:
         # A volume read within its bound of zero (a sliver under the bound, or none): exact.
         for i in np.flatnonzero((codes != CULLED) & (out == 0.0) & (bounds > 0.0)):
             moved_by = scene_rounding(poses[i], self.shift_error, self.size, self.origin)
-            out[i], bounds[i], found = arranged_volume(
-                self.hand_mesh.vertices, self.hand_mesh.faces, self.object_mesh.vertices,
-                self.object_mesh.faces, poses[i], moved_by, self.areas,
-            )  # fmt: skip
+            out[i], bounds[i], found = self.arranged.volume(
+                self.object_mesh.vertices, self.object_mesh.faces, poses[i], moved_by, self.areas
+            )
             codes[i] = ARRANGED
             if links:
                 limits[i] = arranged_moments(
@@ -353,10 +353,8 @@ class ExactIntersector:
         with ``sums``; by ``tables`` and ``sums`` as `_chunk`'s)."""
         mom = self.moment_tables if tables is None else tables
         k = len(poses)
-        o, b = np.zeros(k), np.zeros(k)
-        c = np.zeros(k, np.int64)
-        st = np.zeros((k, N_STATS), np.int64)
-        start = np.zeros(k + 1, np.int64)
+        o, b, c = np.zeros(k), np.zeros(k), np.zeros(k, np.int64)
+        st, start = np.zeros((k, N_STATS), np.int64), np.zeros(k + 1, np.int64)
         rows, values = pose_volumes(
             np.ascontiguousarray(poses), self.hand_mesh, self.hand_tables, self.hand_grid,
             self.object_mesh, self.object_tables, self.object_grid, self.tiny, capacity,
