@@ -77,11 +77,23 @@ def test_the_arranged_hand_gives_the_whole_arrangement():
     assert done > 50
 
 
-def test_the_arranged_hand_finds_its_contacts_once():
+def test_the_arranged_hand_keeps_its_own_contacts_from_the_first_pose():
     box = trimesh.creation.box((1.0, 1.0, 1.0))
+    ball = trimesh.creation.icosphere(2, radius=0.4)
     hand = ArrangedHand(np.asarray(box.vertices), np.asarray(box.faces))
-    first = hand.contacts()
-    assert hand.contacts() is first
+    assert hand.contacts is None
+    poses = np.tile(np.eye(4), (3, 1, 1))
+    poses[:, 0, 3] = (0.5, 0.55, 0.3)
+    for pose in poses:
+        _same_arrangement((hand.vertices, hand.faces), (ball.vertices, ball.faces), pose)
+        got = hand.volume(np.asarray(ball.vertices), np.asarray(ball.faces), pose)
+        whole = arranged_volume(hand.vertices, hand.faces, ball.vertices, ball.faces, pose)
+        assert got[:2] == whole[:2] and got[0] > 0.0
+    # The box's own faces meet only along the edges and corners they share.
+    t, u = hand.contacts
+    assert len(t) == len(u) and set(zip(t.tolist(), u.tolist(), strict=True)) <= set(
+        zip(*find_contacts(box.vertices, box.faces, np.arange(8)), strict=True)
+    )
 
 
 @pytest.mark.parametrize("shift", [0.25, 0.5 - 2.0**-40])

@@ -33,7 +33,6 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from exactgrasp.errors import MeshError
-from exactgrasp.geometry.crossings import find_contacts_near
 from exactgrasp.geometry.exact_cut import Arrangement, cut_exactly
 from exactgrasp.geometry.rational import centroid, orient2d, plane_of, side, triple
 from exactgrasp.geometry.topology import edge_defects, format_point
@@ -178,7 +177,7 @@ def _levels(cut, faces, counts, patch, n_patch) -> np.ndarray:
     return levels
 
 
-def winding_regions(vertices: np.ndarray, faces: np.ndarray, known=None):
+def winding_regions(vertices: np.ndarray, faces: np.ndarray, pairs_of=None):
     """A closed surface cut along every contact, its faces with the winding numbers on their
     two sides, exactly.
 
@@ -187,10 +186,11 @@ def winding_regions(vertices: np.ndarray, faces: np.ndarray, known=None):
     vertices : numpy.ndarray, shape (n, 3), float64
     faces : numpy.ndarray, shape (m, 3), int64
         A closed surface: every edge used as often in each direction.
-    known : (int, numpy.ndarray, numpy.ndarray), optional
-        ``(first, t, u)``: the pairs of ``faces[:first]`` that may meet, found already on
-        those faces with their vertices welded alone (`crossings.find_contacts_near`); by
-        default every pair is searched.
+    pairs_of : callable, optional
+        ``pairs_of(V, F) -> (t, u)``: the pairs of faces that may meet on the welded surface
+        (V (n, 3), F (m, 3): equal coordinates one vertex), as `crossings.find_contacts` finds
+        them (`backends.exact.arranged.ArrangedHand` finds part of them once); by default
+        `exact_cut.cut_exactly` searches them.
 
     Returns
     -------
@@ -213,9 +213,7 @@ def winding_regions(vertices: np.ndarray, faces: np.ndarray, known=None):
     V = np.asarray(vertices, dtype=np.float64)
     welded, inverse = np.unique(V, axis=0, return_inverse=True)
     F = inverse.reshape(-1)[np.asarray(faces, dtype=np.int64)]
-    pairs = None
-    if known is not None:
-        pairs = find_contacts_near(welded, F, np.arange(len(welded)), known[0], known[1:])
+    pairs = None if pairs_of is None else pairs_of(welded, F)
     cut, tiles, tiled, n_cut = cut_exactly(welded, F, pairs)
     G, counts, sources, alone = _merged(tiles)
     G = np.concatenate([F[~tiled], G])

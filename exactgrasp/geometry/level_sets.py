@@ -42,7 +42,7 @@ class LevelSet:
     sources: np.ndarray
 
 
-def level_set(vertices: np.ndarray, faces: np.ndarray, level: int, known=None) -> LevelSet:
+def level_set(vertices: np.ndarray, faces: np.ndarray, level: int, pairs_of=None) -> LevelSet:
     """The points where a closed surface's winding number is at least ``level`` (>= 1).
 
     Parameters
@@ -51,14 +51,14 @@ def level_set(vertices: np.ndarray, faces: np.ndarray, level: int, known=None) -
     faces : numpy.ndarray, shape (m, 3), int64
         A closed surface: every edge used as often in each direction.
     level : int
-    known : (int, numpy.ndarray, numpy.ndarray), optional
-        Pairs of faces that may meet, found already (`exact_solid.winding_regions`).
+    pairs_of : callable, optional
+        How the pairs of faces that may meet are found (`exact_solid.winding_regions`).
 
     Returns
     -------
     LevelSet
     """
-    cut, G, sources, patch, levels, _, _ = winding_regions(vertices, faces, known)
+    cut, G, sources, patch, levels, _, _ = winding_regions(vertices, faces, pairs_of)
     inside = levels >= level
     face_sign = (inside[:, 0].astype(np.int64) - inside[:, 1].astype(np.int64))[patch]
     kept = np.flatnonzero(face_sign)

@@ -28,7 +28,7 @@ import numpy as np
 
 from exactgrasp.backends.exact.tables import MomentTables
 from exactgrasp.backends.exact.tolerances import U
-from exactgrasp.geometry.crossings import find_contacts
+from exactgrasp.geometry.crossings import find_contacts, find_contacts_near
 from exactgrasp.geometry.level_sets import LevelSet, level_set
 
 __all__ = [
@@ -67,7 +67,7 @@ def arranged_volume(
     pose: np.ndarray,
     moved_by: float = 0.0,
     area: float = 0.0,
-    hand_contacts: tuple[np.ndarray, np.ndarray] | None = None,
+    pairs_of=None,
 ) -> tuple[float, float, LevelSet]:
     """The volume of hand ∩ (pose · object), exactly, and the bound of its one rounding.
 
@@ -82,9 +82,9 @@ def arranged_volume(
     moved_by, area : float
         How far rounding may have moved the scene's vertices from the given ones
         (`scene_rounding`), and both surfaces' areas: their product joins the bound.
-    hand_contacts : (numpy.ndarray, numpy.ndarray), optional
-        The pairs of the hand's own faces that may meet (`ArrangedHand.contacts`), which do
-        not depend on the pose; by default they are searched with the rest.
+    pairs_of : callable, optional
+        How the pairs of faces that may meet are found (`ArrangedHand`; see
+        `exact_solid.winding_regions`); by default all are searched at once.
 
     Returns
     -------
@@ -99,8 +99,7 @@ def arranged_volume(
     moved = moved_like_the_kernel(object_vertices, pose)
     V = np.concatenate([hand_vertices, moved])
     F = np.concatenate([hand_faces, np.asarray(object_faces, np.int64) + len(hand_vertices)])
-    known = None if hand_contacts is None else (len(hand_faces), *hand_contacts)
-    found = level_set(V, F, 2, known)
+    found = level_set(V, F, 2, pairs_of)
     volume = float(found.volume)
     rounding = moved_by * area
     if volume <= rounding:
@@ -111,9 +110,10 @@ def arranged_volume(
 
 
 class ArrangedHand:
-    """A hand's surface for `arranged_volume` at any pose, with the pairs of its own faces
-    that may meet found once (`contacts`), not at every pose: on a hand of 272k triangles
-    they were most of a pose's search for contacts.
+    """A hand's surface for `arranged_volume` at any pose, the pairs of its own faces that may
+    meet kept from the first pose (they do not depend on the pose): at later poses only the
+    pairs with an object face are searched (`crossings.find_contacts_near`). On a hand of
+    272k triangles the hand's own pairs were most of a pose's search.
 
     Parameters
     ----------
@@ -124,19 +124,9 @@ class ArrangedHand:
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray):
         self.vertices, self.faces = vertices, faces
-        self._contacts: tuple[np.ndarray, np.ndarray] | None = None
+        #: The pairs ``(t, u)`` of the hand's own faces that may meet, once a pose found them.
+        self.contacts: tuple[np.ndarray, np.ndarray] | None = None
         self._lock = threading.Lock()
-
-    def contacts(self) -> tuple[np.ndarray, np.ndarray]:
-        """`crossings.find_contacts` of the hand's faces, their vertices welded (equal
-        coordinates one point, as `exact_solid.winding_regions` welds them), found at the
-        first call: ``(t, u)``, shape (k,) int64 each."""
-        with self._lock:
-            if self._contacts is None:
-                welded, inverse = np.unique(self.vertices, axis=0, return_inverse=True)
-                faces = inverse.reshape(-1)[np.asarray(self.faces, np.int64)]
-                self._contacts = find_contacts(welded, faces, np.arange(len(welded)))
-        return self._contacts
 
     def volume(
         self,
@@ -150,8 +140,24 @@ class ArrangedHand:
         results), with the hand's own contacts found once."""
         return arranged_volume(
             self.vertices, self.faces, object_vertices, object_faces, pose, moved_by, area,
-            self.contacts(),
+            self._pairs,
         )  # fmt: skip
+
+    def _pairs(self, V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs of the welded scene (the hand's faces first) that may meet: all searched
+        at the first pose, the hand's own kept (welding merges two hand corners only where
+        they are one point, with or without the object); later only those with an object
+        face."""
+        first, identity = len(self.faces), np.arange(len(V))
+        with self._lock:
+            known = self.contacts
+        if known is not None:
+            return find_contacts_near(V, F, identity, first, known)
+        t, u = find_contacts(V, F, identity)
+        own = (t < first) & (u < first)
+        with self._lock:
+            self.contacts = (t[own], u[own])
+        return t, u
 
 
 def arranged_moments(
