@@ -1,0 +1,80 @@
+"""The exact kernel's two builds against each other, in one process: the baseline build
+(``_kernel``) and the AVX2 one (``_kernel_avx2``, x86-64 only), each CPU second of one thread.
+
+The intersector's kernel is swapped chunk by chunk (about 400 poses each, every distinct pose
+of the balanced preset, no broad phase, the builds' order turning from chunk to chunk), and
+each chunk's time under the baseline build is divided by its time under the AVX2 build: the
+machine's drift, which moves both alike within seconds, cancels in the ratio. Prints the
+median and quartiles of those ratios (above 1: the AVX2 build is faster). ``--scene`` as in
+``exact_per_pose.py``.
+
+    python benchmarks/exact_builds.py --scene spray --rounds 5
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import time
+import warnings
+
+import numpy as np
+from exact_per_pose import SCENES, messy_grasp
+from shared_data import add_data_options, data_or_skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scene", choices=sorted(SCENES), default="spray")
+    ap.add_argument("--rounds", type=int, default=5)
+    add_data_options(ap)
+    args = ap.parse_args(argv)
+    warnings.simplefilter("ignore")
+    import exactgrasp as eg
+    from exactgrasp.backends._builds import cpu_has_avx2
+    from exactgrasp.backends.base import repeated_poses
+    from exactgrasp.backends.exact import ExactBackend, intersector
+    from exactgrasp.paths.presets import as_sampler
+
+    if not cpu_has_avx2():
+        print("this CPU does not run AVX2: one build only")
+        return 0
+    name = "exactgrasp.backends.exact._kernel"
+    builds = {b: importlib.import_module(name + b).pose_volumes for b in ("", "_avx2")}
+    needed = SCENES[args.scene]
+    if needed:
+        data = data_or_skip(args, needed)
+        if data is None:
+            return 0
+        grasp = eg.Grasp.from_file(data / needed)
+    else:
+        import tempfile
+        from pathlib import Path
+
+        grasp = messy_grasp(Path(tempfile.mkdtemp()))
+    poses = as_sampler(None).poses().reshape(-1, 4, 4)
+    poses = poses[np.sort(np.unique(repeated_poses(poses), return_index=True)[1])]
+    chunks = np.array_split(poses, max(1, len(poses) // 400))
+    backend = ExactBackend(broadphase=None, n_jobs=1)
+    backend.volumes(grasp, poses)  # tables built, the exact fallback's pairs kept
+    ratios = []
+    for r in range(args.rounds):
+        for i, chunk in enumerate(chunks):
+            seconds = {}
+            for build in ("", "_avx2") if (r + i) % 2 == 0 else ("_avx2", ""):
+                intersector.pose_volumes = builds[build]
+                start = time.process_time()
+                backend.volumes(grasp, chunk)
+                seconds[build] = time.process_time() - start
+            ratios.append(seconds[""] / seconds["_avx2"])
+    intersector.pose_volumes = builds["_avx2"]
+    q = np.quantile(ratios, [0.25, 0.5, 0.75])
+    print(
+        f"{args.scene}: baseline / AVX2 build, {len(ratios)} chunks: median x{q[1]:.3f}",
+        f"(quartiles x{q[0]:.3f}-x{q[2]:.3f})",
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
