@@ -3,9 +3,10 @@
 """The exact kernel, compiled: hand ∩ moved object for a batch of poses (`pose_volumes`). The
 exact backend's other compiled entries are ``_entries.pyx``.
 
-`pose_volumes` loops over the poses, each pose's stages (``_pose.pxd`` and the modules it
-cimports) running without the GIL; it holds the GIL only to grow a table a pose found too
-small and the moment entries' arrays. The tables are the named tuples of `tables`, read
+`pose_volumes` runs its poses, each pose's stages (``_pose.pxd`` and the modules it cimports),
+without the GIL from the first pose to the last; it takes the GIL only to grow a table a pose
+filled and the moment entries' arrays. ``_kernel_avx2.pyx`` compiles this same source for
+CPUs with AVX2. The tables are the named tuples of `tables`, read
 through the extension types of ``_tables.pxd``. It gives, to the bit, what the numba kernel it
 replaced gave (``tests/test_exact_kernel_goldens.py``).
 """
