@@ -31,6 +31,22 @@ cdef inline int64_t cell_index(
     return (i * n1 + j) * n2 + k
 
 
+ctypedef (int64_t, int64_t) CellSpan
+
+
+cdef inline CellSpan cell_span(
+    double low, double high, double corner, double ih, int64_t n
+) noexcept nogil:
+    """The cells (first, last) along one axis of a grid (lower corner ``corner``, inverse
+    cell edge ``ih``, ``n`` cells) that hold [low, high], clipped to the grid; first > last
+    where none does."""
+    cdef int64_t i0 = <int64_t>floor((low - corner) * ih)
+    cdef int64_t i1 = <int64_t>floor((high - corner) * ih)
+    if i1 < 0 or i0 >= n:
+        return 1, 0
+    return (i0 if i0 > 0 else 0), (n - 1 if n - 1 < i1 else i1)
+
+
 cdef inline int64_t point_status(
     const double[::1] x, const double[::1] lo, double h, const int64_t[::1] n,
     const int64_t[::1] status,
@@ -52,16 +68,13 @@ cdef inline bint tri_cell_range(
     rounding.)"""
     cdef double ih = 1.0 / h
     cdef double x0, x1
-    cdef int64_t ax, i0, i1
+    cdef int64_t ax
     for ax in range(3):
         x0 = min3(V[F[f, 0], ax], V[F[f, 1], ax], V[F[f, 2], ax]) - margin
         x1 = max3(V[F[f, 0], ax], V[F[f, 1], ax], V[F[f, 2], ax]) + margin
-        i0 = <int64_t>floor((x0 - lo[ax]) * ih)
-        i1 = <int64_t>floor((x1 - lo[ax]) * ih)
-        if i1 < 0 or i0 >= n[ax]:
+        rng[ax, 0], rng[ax, 1] = cell_span(x0, x1, lo[ax], ih, n[ax])
+        if rng[ax, 0] > rng[ax, 1]:
             return False
-        rng[ax, 0] = i0 if i0 > 0 else 0
-        rng[ax, 1] = n[ax] - 1 if n[ax] - 1 < i1 else i1
     return True
 
 

@@ -10,7 +10,7 @@ explains why the two searches find a pair on every curve where the surfaces cros
 from libc.math cimport INFINITY, fabs, floor
 from libc.stdint cimport int64_t, uint8_t
 
-from exactgrasp.backends.exact._cells cimport surface_cells_box
+from exactgrasp.backends.exact._cells cimport cell_span, surface_cells_box
 from exactgrasp.backends.exact._constants cimport CHUNK, FILTER_ERR, GRID_MARGIN, PLANE_TOL
 from exactgrasp.backends.exact._filters cimport (
     cell_row, cell_survivors, may_cross, piece_box, piece_meets_cell, piece_survivors,
@@ -82,17 +82,16 @@ cdef inline bint _edge_box_near(
     """Whether the box of cells of edge p q (grown by ``margin``, clipped to the grid) holds a
     surface cell of the grid."""
     cdef double a, b
-    cdef int64_t d, i0, i1, lo[3]
+    cdef int64_t d, lo[3]
     cdef int64_t hi[3]
     for d in range(3):
         a = px if d == 0 else (py if d == 1 else pz)
         b = qx if d == 0 else (qy if d == 1 else qz)
-        i0 = <int64_t>floor((min2(a, b) - margin - grid.corner[d]) * ih)
-        i1 = <int64_t>floor((max2(a, b) + margin - grid.corner[d]) * ih)
-        if i1 < 0 or i0 >= grid.shape[d]:
+        lo[d], hi[d] = cell_span(
+            min2(a, b) - margin, max2(a, b) + margin, grid.corner[d], ih, grid.shape[d]
+        )
+        if lo[d] > hi[d]:
             return False
-        lo[d] = i0 if i0 > 0 else 0
-        hi[d] = grid.shape[d] - 1 if grid.shape[d] - 1 < i1 else i1
     return surface_cells_box(
         &grid.surface_table[0], grid.shape[1], grid.shape[2], lo[0], hi[0], lo[1], hi[1],
         lo[2], hi[2],

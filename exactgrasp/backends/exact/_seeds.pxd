@@ -21,10 +21,10 @@ and seed buffer both searches share, `filtered_seeds`, are cimported here, so th
 cimports every stage of the seeds from this module).
 """
 
-from libc.math cimport fabs, floor
+from libc.math cimport fabs
 from libc.stdint cimport int64_t, uint8_t
 
-from exactgrasp.backends.exact._cells cimport surface_cells_box
+from exactgrasp.backends.exact._cells cimport cell_span, surface_cells_box
 from exactgrasp.backends.exact._constants cimport (
     COTREE_CHUNK, GRID_MARGIN, PLANE_TOL, SPHERE_CENTRE, SPHERE_RADIUS,
 )
@@ -83,7 +83,7 @@ cdef inline bint _run_near(
     cdef double c0 = runs[k, SPHERE_CENTRE], c1 = runs[k, SPHERE_CENTRE + 1]
     cdef double c2 = runs[k, SPHERE_CENTRE + 2]
     cdef double r, m, m0 = 0.0, m1 = 0.0, m2 = 0.0
-    cdef int64_t d, i0, i1, cells
+    cdef int64_t d, cells
     cdef int64_t lo[3]
     cdef int64_t hi[3]
     if inverse:
@@ -105,12 +105,9 @@ cdef inline bint _run_near(
             m1 = m
         else:
             m2 = m
-        i0 = <int64_t>floor((m - r - grid.corner[d]) * ih)
-        i1 = <int64_t>floor((m + r - grid.corner[d]) * ih)
-        if i1 < 0 or i0 >= grid.shape[d]:
+        lo[d], hi[d] = cell_span(m - r, m + r, grid.corner[d], ih, grid.shape[d])
+        if lo[d] > hi[d]:
             return False
-        lo[d] = i0 if i0 > 0 else 0
-        hi[d] = grid.shape[d] - 1 if grid.shape[d] - 1 < i1 else i1
     if surface_cells_box(
         &grid.surface_table[0], grid.shape[1], grid.shape[2], lo[0], hi[0], lo[1], hi[1],
         lo[2], hi[2],
@@ -195,18 +192,10 @@ cdef inline int64_t _cotree_piece(
     cdef int64_t n1 = grid.shape[1], n2 = grid.shape[2]
     cdef int64_t i0, i1, j0, j1, k0, k1, i, j, k
     x0, y0, z0, x1, y1, z1 = piece_box(ax_, ay_, az_, bx_, by_, bz_, grow)
-    i0 = <int64_t>floor((x0 - grid.corner[0]) * ih)
-    i0 = i0 if i0 > 0 else 0
-    i1 = <int64_t>floor((x1 - grid.corner[0]) * ih)
-    i1 = grid.shape[0] - 1 if grid.shape[0] - 1 < i1 else i1
-    j0 = <int64_t>floor((y0 - grid.corner[1]) * ih)
-    j0 = j0 if j0 > 0 else 0
-    j1 = <int64_t>floor((y1 - grid.corner[1]) * ih)
-    j1 = n1 - 1 if n1 - 1 < j1 else j1
-    k0 = <int64_t>floor((z0 - grid.corner[2]) * ih)
-    k0 = k0 if k0 > 0 else 0
-    k1 = <int64_t>floor((z1 - grid.corner[2]) * ih)
-    k1 = n2 - 1 if n2 - 1 < k1 else k1
+    # An axis whose span holds no cell leaves its loop empty.
+    i0, i1 = cell_span(x0, x1, grid.corner[0], ih, grid.shape[0])
+    j0, j1 = cell_span(y0, y1, grid.corner[1], ih, n1)
+    k0, k1 = cell_span(z0, z1, grid.corner[2], ih, n2)
     for i in range(i0, i1 + 1):
         for j in range(j0, j1 + 1):
             for k in range(k0, k1 + 1):
