@@ -169,8 +169,7 @@ def find_contacts_near(
     else:
         near = np.empty(0, np.int64)
     searched = np.concatenate([near, np.arange(first, len(F))])
-    label = np.zeros(len(searched), np.int64)
-    t, u, _, _ = _scan(V, F[searched], label, identity, True, True)
+    t, u = find_contacts(V, F[searched], identity)
     t, u = searched[t], searched[u]
     new = (t >= first) | (u >= first)
     t = np.concatenate([np.asarray(known[0], np.int64), t[new]])
