@@ -16,11 +16,10 @@ from __future__ import annotations
 import argparse
 import importlib
 import time
-import warnings
 
 import numpy as np
-from exact_per_pose import SCENES, messy_grasp
-from shared_data import add_data_options, data_or_skip
+from exact_per_pose import SCENES, scene_and_poses
+from shared_data import add_data_options
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -29,31 +28,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rounds", type=int, default=5)
     add_data_options(ap)
     args = ap.parse_args(argv)
-    warnings.simplefilter("ignore")
-    import exactgrasp as eg
     from exactgrasp.backends._builds import cpu_has_avx2
-    from exactgrasp.backends.base import repeated_poses
     from exactgrasp.backends.exact import ExactBackend, intersector
-    from exactgrasp.paths.presets import as_sampler
 
     if not cpu_has_avx2():
         print("this CPU does not run AVX2: one build only")
         return 0
     name = "exactgrasp.backends.exact._kernel"
     builds = {b: importlib.import_module(name + b).pose_volumes for b in ("", "_avx2")}
-    needed = SCENES[args.scene]
-    if needed:
-        data = data_or_skip(args, needed)
-        if data is None:
-            return 0
-        grasp = eg.Grasp.from_file(data / needed)
-    else:
-        import tempfile
-        from pathlib import Path
-
-        grasp = messy_grasp(Path(tempfile.mkdtemp()))
-    poses = as_sampler(None).poses().reshape(-1, 4, 4)
-    poses = poses[np.sort(np.unique(repeated_poses(poses), return_index=True)[1])]
+    scene = scene_and_poses(args)
+    if scene is None:
+        return 0
+    grasp, poses = scene
     chunks = np.array_split(poses, max(1, len(poses) // 400))
     backend = ExactBackend(broadphase=None, n_jobs=1)
     backend.volumes(grasp, poses)  # tables built, the exact fallback's pairs kept

@@ -52,25 +52,16 @@ def messy_grasp(folder):
     return eg.Grasp(hand, eg.objects.get("bottle_with_handle"), place, name="messy")
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--label", default="this tree")
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--scene", choices=sorted(SCENES), default="spray")
-    ap.add_argument(
-        "--threads", action="store_true",
-        help="also time the poses on two threads (n_jobs=2) against one, wall clock, alternating",
-    )  # fmt: skip
-    add_data_options(ap)
-    args = ap.parse_args(argv)
+def scene_and_poses(args):
+    """The grasp of ``args.scene`` and every distinct pose of the balanced preset (k, 4, 4),
+    or None where the scene's shared data is missing (a message says so)."""
     needed = SCENES[args.scene]
     data = data_or_skip(args, needed) if needed else None
     if needed and data is None:
-        return 0
+        return None
     warnings.simplefilter("ignore")
     import exactgrasp as eg
     from exactgrasp.backends.base import repeated_poses
-    from exactgrasp.backends.exact import ExactBackend
     from exactgrasp.paths.presets import as_sampler
 
     if needed:
@@ -82,7 +73,26 @@ def main(argv: list[str] | None = None) -> int:
         with tempfile.TemporaryDirectory() as tmp:
             grasp = messy_grasp(Path(tmp))
     poses = as_sampler(None).poses().reshape(-1, 4, 4)
-    poses = poses[np.sort(np.unique(repeated_poses(poses), return_index=True)[1])]
+    return grasp, poses[np.sort(np.unique(repeated_poses(poses), return_index=True)[1])]
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--label", default="this tree")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--scene", choices=sorted(SCENES), default="spray")
+    ap.add_argument(
+        "--threads", action="store_true",
+        help="also time the poses on two threads (n_jobs=2) against one, wall clock, alternating",
+    )  # fmt: skip
+    add_data_options(ap)
+    args = ap.parse_args(argv)
+    scene = scene_and_poses(args)
+    if scene is None:
+        return 0
+    grasp, poses = scene
+    from exactgrasp.backends.exact import ExactBackend
+
     backend = ExactBackend(broadphase=None, n_jobs=1)
     backend.volumes(grasp, poses[:50])
     times = []
