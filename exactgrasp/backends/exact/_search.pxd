@@ -45,6 +45,7 @@ from exactgrasp.backends.exact._constants cimport (
 )
 from exactgrasp.backends.exact._pairs cimport pair
 from exactgrasp.backends.exact._predicates cimport CROSS
+from exactgrasp.backends.exact._prefetch cimport prefetch
 from exactgrasp.backends.exact._tables cimport (
     HandTables,
     MeshTables,
@@ -243,6 +244,20 @@ cdef inline int64_t _slot(Trace *T, Workspace W, int64_t key) noexcept nogil:
     return h
 
 
+cdef inline void _prefetch_across(HandTables hand, int64_t ft) noexcept nogil:
+    """Ask for the rows of the hand faces across ft's edges (their links and their records'
+    first 120 bytes: normal, offset, error, cost, corners), which the pairs after ft's
+    along a curve read first: the hand's tables exceed the caches, and a curve's next face is
+    anywhere in them."""
+    cdef int64_t k, g
+    for k in range(3):
+        g = hand.face_links[ft, FACE_ACROSS + k]
+        prefetch(&hand.face_links[g, 0])
+        prefetch(&hand.face_records[g, 0])
+        prefetch(&hand.face_records[g, FACE_CORNERS + 2])
+        prefetch(&hand.face_records[g, FACE_CORNERS + 8])
+
+
 cdef inline (double, double, int64_t, int64_t, int64_t) trace_pairs(
     MeshTables hand_mesh, HandTables hand, MeshTables object_mesh, ObjectTables obj,
     double[:, ::1] BV, double[:, ::1] BD, double[:, ::1] BN, Workspace W, int64_t nseeds,
@@ -262,7 +277,7 @@ cdef inline (double, double, int64_t, int64_t, int64_t) trace_pairs(
     bound, crossings, pairs evaluated, code), code `OK`, `DEGENERATE` (an uncertain sign or
     an inconsistency), `OVERFLOW` (records full) or `GROW` (the pair table is half full)."""
     cdef Trace T
-    cdef int64_t k, ft, s, key, h, code, ed
+    cdef int64_t k, ft, s, key, h, code, ed, ft_near = -1
     cdef bint chained
     memset(&T, 0, sizeof(Trace))
     T.gscale, T.gb = gscale, gb
@@ -291,6 +306,9 @@ cdef inline (double, double, int64_t, int64_t, int64_t) trace_pairs(
             W.pair_tags[h] = T.tag
             W.pair_keys[h] = key
             T.npairs += 1
+            if ft != ft_near:
+                _prefetch_across(hand, ft)
+                ft_near = ft
             code = _evaluate(&T, hand_mesh, hand, object_mesh, obj, BV, BD, BN, W, ft, s)
             if code != OK:
                 return T.seg, T.segerr, T.ncross, T.npairs, code
