@@ -32,6 +32,7 @@ from exactgrasp.backends.exact._edge_seeds cimport filtered_seeds, object_edge_s
 from exactgrasp.backends.exact._filters cimport (
     cell_row, cell_survivors, piece_box, piece_meets_cell, sphere_meets_cell,
 )
+from exactgrasp.backends.exact._prefetch cimport prefetch
 from exactgrasp.backends.exact._tables cimport (
     CellGrid, HandTables, MeshTables, SideTables, Workspace,
 )
@@ -209,6 +210,34 @@ cdef inline int64_t _cotree_piece(
     return n
 
 
+cdef inline int64_t _next_near(const uint8_t[::1] near, int64_t r) noexcept nogil:
+    """The first run from r on that is near (``near.shape[0]`` where none is)."""
+    while r < near.shape[0] and not near[r]:
+        r += 1
+    return r
+
+
+cdef inline void _prefetch_run(
+    const int64_t *cotree, const int64_t *E, const int64_t *EF, const double *V, int64_t ew,
+    int64_t efs, int64_t vw, int64_t r, int64_t ncotree, bint ends,
+) noexcept nogil:
+    """Ask for the rows the co-tree edges of run r read: their ends' coordinates (``ends``;
+    their edges' rows asked for before) or their edges' rows (ends, first face). Both are
+    scattered over tables larger than the caches; the pieces of one run take long enough to
+    bring the next run's in."""
+    cdef int64_t kk, e, top = r * COTREE_CHUNK + COTREE_CHUNK
+    if ncotree < top:
+        top = ncotree
+    for kk in range(r * COTREE_CHUNK, top):
+        e = cotree[kk]
+        if ends:
+            prefetch(&V[vw * E[ew * e]])
+            prefetch(&V[vw * E[ew * e + 1]])
+        else:
+            prefetch(&E[ew * e])
+            prefetch(&EF[efs * e])
+
+
 cdef inline int64_t cotree_seeds(
     MeshTables hand_mesh, HandTables hand, SideTables obj, CellGrid object_grid,
     const double[:, :] R, const double[:] t, const uint8_t[::1] near, double gscale,
@@ -240,10 +269,15 @@ cdef inline int64_t cotree_seeds(
     cdef const int64_t *cotree = &hand.cotree[0]
     cdef int64_t ncotree = hand.cotree.shape[0], efs = hand_mesh.edge_faces.shape[1]
     cdef int64_t vw = hand_mesh.vertices.shape[1], ew = hand_mesh.edges.shape[1]
-    cdef int64_t r, kk, top, e, u, v, t1f, pieces, w
-    for r in range(near.shape[0]):
-        if not near[r]:
-            continue
+    cdef int64_t r, kk, top, e, u, v, t1f, pieces, w, ahead
+    r = _next_near(near, 0)
+    if r < near.shape[0]:
+        _prefetch_run(cotree, E, EF, V, ew, efs, vw, r, ncotree, False)
+    while r < near.shape[0]:
+        ahead = _next_near(near, r + 1)
+        _prefetch_run(cotree, E, EF, V, ew, efs, vw, r, ncotree, True)
+        if ahead < near.shape[0]:
+            _prefetch_run(cotree, E, EF, V, ew, efs, vw, ahead, ncotree, False)
         top = r * COTREE_CHUNK + COTREE_CHUNK
         if ncotree < top:
             top = ncotree
@@ -274,4 +308,5 @@ cdef inline int64_t cotree_seeds(
                 )
                 if n < 0:
                     return -1
+        r = ahead
     return n
