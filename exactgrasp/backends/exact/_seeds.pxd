@@ -64,15 +64,15 @@ cdef inline bint _scan_cells(
     cdef int64_t n1 = grid.shape[1], n2 = grid.shape[2]
     cdef const int64_t *start = &grid.cell_start[0]
     cdef int64_t i, j, kk, c
-    cdef bint ok = False
     for i in range(lo[0], hi[0] + 1):
         for j in range(lo[1], hi[1] + 1):
             for kk in range(lo[2], hi[2] + 1):
                 c = (i * n1 + j) * n2 + kk
                 if start[c + 1] == start[c]:
                     continue
-                ok = ok | sphere_meets_cell(cell_row(grid.bounds, c), m0, m1, m2, r, margin)
-    return ok
+                if sphere_meets_cell(cell_row(grid.bounds, c), m0, m1, m2, r, margin):
+                    return True
+    return False
 
 
 cdef inline bint _run_near(
