@@ -329,7 +329,7 @@ class Arrangement:
         return True
 
 
-def cut_exactly(vertices: np.ndarray, faces: np.ndarray, pairs=None):
+def cut_exactly(vertices: np.ndarray, faces: np.ndarray):
     """The arrangement of a closed surface: its triangles cut along every contact, exactly.
 
     Parameters
@@ -337,10 +337,7 @@ def cut_exactly(vertices: np.ndarray, faces: np.ndarray, pairs=None):
     vertices : numpy.ndarray, shape (n, 3), float64
         Distinct points (welded: equal coordinates are one vertex).
     faces : numpy.ndarray, shape (m, 3), int64
-    pairs : (numpy.ndarray, numpy.ndarray), shape (k,) int64 each, optional
-        The pairs of faces that may meet, found already (`crossings.find_contacts_near`);
-        by default `crossings.find_contacts` finds them.
-
+        A closed surface, or the part of one that is cut (`exact_window`).
     Returns
     -------
     arrangement : Arrangement
@@ -356,7 +353,7 @@ def cut_exactly(vertices: np.ndarray, faces: np.ndarray, pairs=None):
     """
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
-    t, u = find_contacts(V, F, np.arange(len(V))) if pairs is None else pairs
+    t, u = find_contacts(V, F, np.arange(len(V)))
     in_contact = np.unique(np.concatenate([t, u]))
     cut = Arrangement(V, F, np.unique(F[in_contact]))
     for a, b in zip(t.tolist(), u.tolist(), strict=True):

@@ -38,9 +38,12 @@ from exactgrasp.geometry.rational import centroid, orient2d, plane_of, side, tri
 from exactgrasp.geometry.topology import edge_defects, format_point
 from exactgrasp.geometry.wedges import split_nonmanifold
 
-__all__ = ["solid_boundary", "winding_regions"]
+__all__ = ["Rays", "cut_faces", "face_levels", "patches", "solid_boundary", "winding_regions"]
 
 _AXES = ((1, 2), (2, 0), (0, 1))
+#: The levels of a patch no ray asked (zero-area faces only): below and above every level,
+#: so that it bounds no level set.
+UNDECIDED = -(2**40)
 
 
 def _merged(tiles) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
@@ -67,29 +70,44 @@ def _merged(tiles) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
     )
 
 
-def _patches(faces: np.ndarray, n_points: int) -> tuple[int, np.ndarray]:
-    """Faces joined across edges of exactly two faces."""
+def patches(
+    faces: np.ndarray, n_points: int, joined: np.ndarray | None = None
+) -> tuple[int, np.ndarray]:
+    """Faces joined across edges of exactly two faces: the number of patches, and each
+    face's (k,). With ``joined`` (k,) bool, only those faces join; the others stand alone."""
     tail = faces.reshape(-1)
     head = faces[:, [1, 2, 0]].reshape(-1)
     key = np.minimum(tail, head) * np.int64(n_points) + np.maximum(tail, head)
-    order = np.argsort(key, kind="stable")
+    order = np.argsort(key)  # the pairs of an edge in either order: the same graph
     sk = key[order]
     bounds = np.flatnonzero(np.r_[True, sk[1:] != sk[:-1], True])
     pair = bounds[:-1][np.diff(bounds) == 2]
     fa, fb = order[pair] // 3, order[pair + 1] // 3
+    if joined is not None:
+        both = joined[fa] & joined[fb]
+        fa, fb = fa[both], fb[both]
     m = len(faces)
     return connected_components(coo_matrix((np.ones(len(fa)), (fa, fb)), (m, m)), directed=False)
 
 
-class _Rays:
+class Rays:
     """Exact winding numbers at points inside the faces of a cut surface."""
 
-    def __init__(self, cut: Arrangement, faces: np.ndarray, counts: np.ndarray) -> None:
+    def __init__(
+        self, cut: Arrangement, faces: np.ndarray, counts: np.ndarray, boxes: tuple = ()
+    ) -> None:
+        """``faces`` (k, 3) into ``cut.points`` with their ``counts`` (k,); ``boxes``: the
+        bounding boxes (lowest, highest corners, (j, 3) each) of the last j faces, where the
+        caller has them."""
         self.cut = cut
         self.faces = faces
         self.counts = counts
-        corners = cut.approx.array()[faces]
+        known = len(boxes[0]) if boxes else 0
+        corners = cut.approx.array()[faces[: len(faces) - known]]
         self.lo, self.hi = corners.min(1), corners.max(1)
+        if known:
+            self.lo = np.concatenate([self.lo, boxes[0]])
+            self.hi = np.concatenate([self.hi, boxes[1]])
         self.planes: dict[int, tuple] = {}
 
     def plane(self, f: int) -> tuple:
@@ -119,16 +137,20 @@ class _Rays:
             return flip if dx > 0 else -flip
         return 0
 
-    def above(self, f: int) -> int:
-        """The winding number just past face f along the coordinate axis its normal leans
-        to most (its front if the normal points that way, else its back)."""
-        pl = self.plane(f)
-        k = max(range(3), key=lambda a: abs(pl[a]))
-        i, j = _AXES[k]
+    def centre(self, f: int) -> tuple[tuple, list[float]]:
+        """Face f's centroid: exact (homogeneous integers), and correctly rounded (units)."""
         P = self.cut.points
         a, b, c = self.faces[f]
         q = centroid(P[a], P[b], P[c])
-        x = self.cut.ints.to_float(q)
+        return q, self.cut.ints.to_float(q)
+
+    def above(self, f: int) -> int:
+        """The winding number just past face f's centroid along the coordinate axis its
+        normal leans to most (its front if the normal points that way, else its back)."""
+        pl = self.plane(f)
+        k = max(range(3), key=lambda a: abs(pl[a]))
+        i, j = _AXES[k]
+        q, x = self.centre(f)
         pad = 4e-16 * max(map(abs, x)) + 1e-300
         near = (
             (self.lo[:, i] <= x[i] + pad)
@@ -156,28 +178,46 @@ class _Rays:
         return total
 
 
+def face_levels(rays: Rays, f: int) -> tuple[int, int] | None:
+    """The winding numbers (behind, in front) of face f of ``rays.faces``, from a ray at its
+    centroid; None where it has no area (no ray can ask it)."""
+    pl = rays.plane(f)
+    if not any(pl[:3]):
+        return None
+    k = max(range(3), key=lambda a: abs(pl[a]))
+    w, count = rays.above(f), int(rays.counts[f])
+    behind = w if pl[k] < 0 else w + count
+    return behind, behind - count
+
+
 def _levels(cut, faces, counts, patch, n_patch) -> np.ndarray:
     """(n_patch, 2): the winding number behind and in front of each patch."""
-    rays = _Rays(cut, faces, counts)
-    levels = np.zeros((n_patch, 2), np.int64)
+    rays = Rays(cut, faces, counts)
+    levels = np.full((n_patch, 2), UNDECIDED, np.int64)
     done = np.zeros(n_patch, bool)
     for f in range(len(faces)):
         p = patch[f]
         if done[p]:
             continue
-        pl = rays.plane(f)
-        if not any(pl[:3]):
-            continue  # zero area: asks another face of the patch
-        k = max(range(3), key=lambda a: abs(pl[a]))
-        w = rays.above(f)
-        behind = w if pl[k] < 0 else w + int(counts[f])
-        levels[p] = behind, behind - int(counts[f])
-        done[p] = True
-    levels[~done] = -(2**40)  # faces of zero area only: no boundary of anything
+        found = face_levels(rays, f)
+        if found is not None:  # else another face of the patch is asked
+            levels[p] = found
+            done[p] = True
     return levels
 
 
-def winding_regions(vertices: np.ndarray, faces: np.ndarray, pairs_of=None):
+def cut_faces(F: np.ndarray, tiles, tiled: np.ndarray):
+    """The faces of a cut (`exact_cut.cut_exactly`'s ``tiles`` and ``tiled`` of faces F):
+    the untiled faces, then the tiles, coincident ones merged; their counts and the face of
+    F each lies in, and whether every tile stood alone."""
+    G, counts, sources, alone = _merged(tiles)
+    G = np.concatenate([F[~tiled], G])
+    sources = np.concatenate([np.flatnonzero(~tiled), sources])
+    counts = np.concatenate([np.ones(int((~tiled).sum()), np.int64), counts])
+    return G, counts, sources, alone
+
+
+def winding_regions(vertices: np.ndarray, faces: np.ndarray):
     """A closed surface cut along every contact, its faces with the winding numbers on their
     two sides, exactly.
 
@@ -186,11 +226,6 @@ def winding_regions(vertices: np.ndarray, faces: np.ndarray, pairs_of=None):
     vertices : numpy.ndarray, shape (n, 3), float64
     faces : numpy.ndarray, shape (m, 3), int64
         A closed surface: every edge used as often in each direction.
-    pairs_of : callable, optional
-        ``pairs_of(V, F) -> (t, u)``: the pairs of faces that may meet on the welded surface
-        (V (n, 3), F (m, 3): equal coordinates one vertex), as `crossings.find_contacts` finds
-        them (`backends.exact.arranged.ArrangedHand` finds part of them once); by default
-        `exact_cut.cut_exactly` searches them.
 
     Returns
     -------
@@ -213,13 +248,9 @@ def winding_regions(vertices: np.ndarray, faces: np.ndarray, pairs_of=None):
     V = np.asarray(vertices, dtype=np.float64)
     welded, inverse = np.unique(V, axis=0, return_inverse=True)
     F = inverse.reshape(-1)[np.asarray(faces, dtype=np.int64)]
-    pairs = None if pairs_of is None else pairs_of(welded, F)
-    cut, tiles, tiled, n_cut = cut_exactly(welded, F, pairs)
-    G, counts, sources, alone = _merged(tiles)
-    G = np.concatenate([F[~tiled], G])
-    sources = np.concatenate([np.flatnonzero(~tiled), sources])
-    counts = np.concatenate([np.ones(int((~tiled).sum()), np.int64), counts])
-    n_patch, patch = _patches(G, len(cut.points))
+    cut, tiles, tiled, n_cut = cut_exactly(welded, F)
+    G, counts, sources, alone = cut_faces(F, tiles, tiled)
+    n_patch, patch = patches(G, len(cut.points))
     levels = _levels(cut, G, counts, patch, n_patch)
     return cut, G, sources, patch, levels, alone, n_cut
 

@@ -6,7 +6,9 @@ surface, have winding number 2 exactly in their intersection, so level 2 of the 
 intersection (`exactgrasp.backends.exact.arranged` uses it where floating point cannot decide
 a volume). The surface is cut along every contact and each patch's winding numbers are found
 exactly (`exactgrasp.geometry.exact_solid.winding_regions`); the volume is the divergence
-theorem's sum over the boundary's triangles, on their exact points.
+theorem's sum over the boundary's triangles, on their exact points. Where the caller knows a
+box outside which the level is not reached (level 2 lies in the smaller surface's box), only
+the faces near that box are cut and asked (`exactgrasp.geometry.exact_window`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from math import gcd
 import numpy as np
 
 from exactgrasp.geometry.exact_solid import winding_regions
+from exactgrasp.geometry.exact_window import window_regions
 from exactgrasp.geometry.rational import triple
 
 __all__ = ["LevelSet", "level_set"]
@@ -42,7 +45,9 @@ class LevelSet:
     sources: np.ndarray
 
 
-def level_set(vertices: np.ndarray, faces: np.ndarray, level: int, pairs_of=None) -> LevelSet:
+def level_set(
+    vertices: np.ndarray, faces: np.ndarray, level: int, window: tuple | None = None
+) -> LevelSet:
     """The points where a closed surface's winding number is at least ``level`` (>= 1).
 
     Parameters
@@ -51,14 +56,20 @@ def level_set(vertices: np.ndarray, faces: np.ndarray, level: int, pairs_of=None
     faces : numpy.ndarray, shape (m, 3), int64
         A closed surface: every edge used as often in each direction.
     level : int
-    pairs_of : callable, optional
-        How the pairs of faces that may meet are found (`exact_solid.winding_regions`).
+    window : tuple, optional
+        ``(lo, hi)`` or ``(lo, hi, face_boxes)``: a box (corners (3,)) outside which the
+        winding number is below ``level``, known to the caller; then only the faces near it
+        are cut and asked (`exact_window.window_regions`, which also says what
+        ``face_boxes`` is), and the vertices must be distinct points.
 
     Returns
     -------
     LevelSet
     """
-    cut, G, sources, patch, levels, _, _ = winding_regions(vertices, faces, pairs_of)
+    if window is None:
+        cut, G, sources, patch, levels, _, _ = winding_regions(vertices, faces)
+    else:
+        cut, G, sources, patch, levels = window_regions(vertices, faces, *window)
     inside = levels >= level
     face_sign = (inside[:, 0].astype(np.int64) - inside[:, 1].astype(np.int64))[patch]
     kept = np.flatnonzero(face_sign)

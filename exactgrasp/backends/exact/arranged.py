@@ -28,13 +28,11 @@ import numpy as np
 
 from exactgrasp.backends.exact.tables import MomentTables
 from exactgrasp.backends.exact.tolerances import U
-from exactgrasp.geometry.crossings import find_contacts, find_contacts_near
 from exactgrasp.geometry.level_sets import LevelSet, level_set
 
 __all__ = [
     "ArrangedHand",
     "arranged_moments",
-    "arranged_volume",
     "moved_like_the_kernel",
     "scene_rounding",
     "shift_rounding",
@@ -59,73 +57,20 @@ def moved_like_the_kernel(vertices: np.ndarray, pose: np.ndarray) -> np.ndarray:
     return np.stack([R[k, 0] * x + R[k, 1] * y + R[k, 2] * z + t[k] for k in range(3)], axis=1)
 
 
-def arranged_volume(
-    hand_vertices: np.ndarray,
-    hand_faces: np.ndarray,
-    object_vertices: np.ndarray,
-    object_faces: np.ndarray,
-    pose: np.ndarray,
-    moved_by: float = 0.0,
-    area: float = 0.0,
-    pairs_of=None,
-) -> tuple[float, float, LevelSet]:
-    """The volume of hand ∩ (pose · object), exactly, and the bound of its one rounding.
-
-    Parameters
-    ----------
-    hand_vertices, object_vertices : numpy.ndarray, shape (n, 3), float64
-    hand_faces, object_faces : numpy.ndarray, shape (m, 3), int64
-        Two closed, outward-oriented 2-manifolds in the kernel's local coordinates (the
-        object in its own frame).
-    pose : numpy.ndarray, shape (4, 4)
-        The object's pose, in local coordinates.
-    moved_by, area : float
-        How far rounding may have moved the scene's vertices from the given ones
-        (`scene_rounding`), and both surfaces' areas: their product joins the bound.
-    pairs_of : callable, optional
-        How the pairs of faces that may meet are found (`ArrangedHand`; see
-        `exact_solid.winding_regions`); by default all are searched at once.
-
-    Returns
-    -------
-    volume, bound : float
-        The exact volume rounded to the nearest float (cubed units), and its bound: half a
-        unit in its last place, plus ``moved_by * area``. A volume no larger than
-        ``moved_by * area`` is 0, with twice that as its bound.
-    found : exactgrasp.geometry.level_sets.LevelSet
-        The intersection; its triangles' sources number the hand's faces first, then the
-        object's.
-    """
-    moved = moved_like_the_kernel(object_vertices, pose)
-    V = np.concatenate([hand_vertices, moved])
-    F = np.concatenate([hand_faces, np.asarray(object_faces, np.int64) + len(hand_vertices)])
-    found = level_set(V, F, 2, pairs_of)
-    volume = float(found.volume)
-    rounding = moved_by * area
-    if volume <= rounding:
-        # No larger than what rounding the scene may have made: 0 is as true, and a contact
-        # reads 0 as the kernel's do.
-        return 0.0, 2.0 * rounding, LevelSet(found.volume, found.triangles[:0], found.sources[:0])
-    return volume, float(np.spacing(volume)) / 2 + rounding, found
-
-
 class ArrangedHand:
-    """A hand's surface for `arranged_volume` at any pose, the pairs of its own faces that may
-    meet kept from the first pose (they do not depend on the pose): at later poses only the
-    pairs with an object face are searched (`crossings.find_contacts_near`). On a hand of
-    272k triangles the hand's own pairs were most of a pose's search.
+    """A hand's surface for the exact volume of its intersection with an object at any pose
+    (`volume`): the hand welded, and its faces' boxes, made at the first pose.
 
     Parameters
     ----------
     vertices : numpy.ndarray, shape (n, 3), float64
     faces : numpy.ndarray, shape (m, 3), int64
-        As `arranged_volume`'s hand.
+        A closed, outward-oriented 2-manifold in the kernel's local coordinates.
     """
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray):
         self.vertices, self.faces = vertices, faces
-        #: The pairs ``(t, u)`` of the hand's own faces that may meet, once a pose found them.
-        self.contacts: tuple[np.ndarray, np.ndarray] | None = None
+        self._welded: tuple | None = None
         self._lock = threading.Lock()
 
     def volume(
@@ -136,28 +81,72 @@ class ArrangedHand:
         moved_by: float = 0.0,
         area: float = 0.0,
     ) -> tuple[float, float, LevelSet]:
-        """`arranged_volume` of this hand and the object at ``pose`` (the same arguments and
-        results), with the hand's own contacts found once."""
-        return arranged_volume(
-            self.vertices, self.faces, object_vertices, object_faces, pose, moved_by, area,
-            self._pairs,
-        )  # fmt: skip
+        """The volume of hand ∩ (pose · object), exactly, and the bound of its one rounding.
 
-    def _pairs(self, V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The pairs of the welded scene (the hand's faces first) that may meet: all searched
-        at the first pose, the hand's own kept (welding merges two hand corners only where
-        they are one point, with or without the object); later only those with an object
-        face."""
-        first, identity = len(self.faces), np.arange(len(V))
+        The intersection is level 2 of the two surfaces together, which lies in the moved
+        object's box: only the faces near it are cut (`exactgrasp.geometry.exact_window`).
+
+        Parameters
+        ----------
+        object_vertices : numpy.ndarray, shape (k, 3), float64
+        object_faces : numpy.ndarray, shape (l, 3), int64
+            A closed, outward-oriented 2-manifold, in the object's own frame.
+        pose : numpy.ndarray, shape (4, 4)
+            The object's pose, in local coordinates.
+        moved_by, area : float
+            How far rounding may have moved the scene's vertices from the given ones
+            (`scene_rounding`), and both surfaces' areas: their product joins the bound.
+
+        Returns
+        -------
+        volume, bound : float
+            The exact volume rounded to the nearest float (cubed units), and its bound: half
+            a unit in its last place, plus ``moved_by * area``. A volume no larger than
+            ``moved_by * area`` is 0, with twice that as its bound.
+        found : exactgrasp.geometry.level_sets.LevelSet
+            The intersection; its triangles' sources number the hand's faces first, then
+            the object's.
+        """
+        moved = moved_like_the_kernel(object_vertices, pose)
+        V, F, boxes = self._scene(moved, np.asarray(object_faces, np.int64))
+        found = level_set(V, F, 2, (moved.min(0), moved.max(0), boxes))
+        volume = float(found.volume)
+        rounding = moved_by * area
+        if volume <= rounding:
+            # No larger than what rounding the scene may have made: 0 is as true, and a
+            # contact reads 0 as the kernel's do.
+            empty = LevelSet(found.volume, found.triangles[:0], found.sources[:0])
+            return 0.0, 2.0 * rounding, empty
+        return volume, float(np.spacing(volume)) / 2 + rounding, found
+
+    def _scene(self, moved: np.ndarray, object_faces: np.ndarray):
+        """The welded scene: distinct points (the hand's, then the object's not among them),
+        the hand's faces then the object's into them, and the hand faces' boxes (lowest and
+        highest coordinates along each axis, (3, m) each)."""
         with self._lock:
-            known = self.contacts
-        if known is not None:
-            return find_contacts_near(V, F, identity, first, known)
-        t, u = find_contacts(V, F, identity)
-        own = (t < first) & (u < first)
-        with self._lock:
-            self.contacts = (t[own], u[own])
-        return t, u
+            if self._welded is None:
+                W, inverse = np.unique(self.vertices, axis=0, return_inverse=True)
+                H = inverse.reshape(-1)[np.asarray(self.faces, np.int64)]
+                a, b, c = (np.ascontiguousarray(W[H[:, k]].T) for k in range(3))
+                boxes = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
+                self._welded = W, np.ascontiguousarray(W.T), H, boxes
+            W, columns, H, boxes = self._welded
+        # A hand vertex equal to an object's lies in the object's box.
+        lo, hi = moved.min(0), moved.max(0)
+        inside = (columns[0] >= lo[0]) & (columns[0] <= hi[0])
+        for k in (1, 2):
+            inside &= (columns[k] >= lo[k]) & (columns[k] <= hi[k])
+        there = np.flatnonzero(inside)
+        points, first, back = np.unique(
+            np.concatenate([W[there], moved]), axis=0, return_index=True, return_inverse=True
+        )
+        handed = first < len(there)
+        index = np.empty(len(points), np.int64)
+        index[handed] = there[first[handed]]
+        index[~handed] = len(W) + np.arange(int((~handed).sum()))
+        faces = index[back.reshape(-1)[len(there) :]][object_faces]
+        V = np.concatenate([W, points[~handed]])
+        return V, np.concatenate([H, faces]), boxes
 
 
 def arranged_moments(
@@ -172,7 +161,7 @@ def arranged_moments(
     Parameters
     ----------
     found : LevelSet
-        `arranged_volume`'s intersection.
+        `ArrangedHand.volume`'s intersection.
     hand_faces : int
         The hand's faces (the object's are numbered after them).
     tables : tables.MomentTables
