@@ -246,3 +246,17 @@ def test_the_crossing_script_makes_the_stored_meshes():
     assert set(made) == stored
     for key in made:
         assert_same_bits(made[key], CROSSINGS[key])
+
+
+def test_the_scans_entries_are_ordered_alike_packed_in_one_integer_or_not():
+    from exactgrasp.geometry.crossings import _by_cell
+
+    rng = np.random.default_rng(11)
+    tris = rng.integers(0, 500, 4000)
+    for top in (1000, 2**60):  # packed into one integer; too large for that: two keys
+        keys = rng.integers(0, top, 4000)
+        keys[::7] = keys[0]  # cells with several triangles
+        got = _by_cell(keys, tris, 500)
+        order = np.lexsort((tris, keys))
+        np.testing.assert_array_equal(got[0], keys[order])
+        np.testing.assert_array_equal(got[1], tris[order])
