@@ -17,12 +17,13 @@ every face; here only these do:
    (`exact_solid.patches`) make patches along which the winding numbers do not change.
 3. **Rays** from a core face's centroid that rounds into the box (so lies in the padded box,
    correctly rounded) count every face above it: the near faces' cut, and the other faces
-   whose boxes meet the padded box along both axes across the ray (the faces such a ray can
-   cross). Ties are broken as in `exact_solid.Rays`, by the points alone, so a face and the
-   tiles of its neighbour's cut agree along their common edge.
-4. A patch none of whose faces' centroids rounds into the box lies outside the box (rounding
-   keeps order), where the caller knows the level is not reached on either side: its levels
-   are `exact_solid.UNDECIDED`, as are those of faces outside the padded box.
+   whose boxes meet the padded box along both axes across the ray and lie above it (the
+   faces such a ray can cross). Ties are broken as in `exact_solid.Rays`, by the points
+   alone, so a face and the tiles of its neighbour's cut agree along their common edge.
+4. A patch none of whose faces' centroids rounds into the box has them all outside the box
+   (rounding keeps order), where the caller knows the level is not reached on either side,
+   so it is reached nowhere along the patch: its levels are `exact_solid.UNDECIDED`, as are
+   those of faces outside the padded box.
 """
 
 from __future__ import annotations

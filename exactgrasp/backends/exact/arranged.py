@@ -8,7 +8,8 @@ bound of zero, and the kernel cannot tell its size. Such a pose is computed agai
 rounding: the hand's surface and the moved object's, given as one closed surface, have
 winding number 2 exactly where both solids are (each is a 2-manifold, winding number 0 or 1),
 and `exactgrasp.geometry.level_sets.level_set` gives that set's volume exactly from the
-surfaces' exact arrangement, with its boundary's triangles, whose moments
+surfaces' exact arrangement near the moved object's box (`exactgrasp.geometry.exact_window`:
+the set lies in the object), with its boundary's triangles, whose moments
 (`arranged_moments`) give the volume's derivatives there as the kernel's would. The object
 is moved with the kernel's own arithmetic (`_pose.move_object`), so the scene is the one the
 kernel read; the one rounding is the volume's, to the nearest float.
