@@ -113,3 +113,38 @@ def test_the_arranged_hand_on_boxes_reads_the_overlap(shift):
     volume, bound, _ = ArrangedHand(*hand).volume(hand[0], hand[1], pose)
     assert volume == 1.0 - shift
     assert bound == np.spacing(1.0 - shift) / 2
+
+
+def _random_hand(rng, shift: float):
+    """The solid of one to three boxes on a grid of eighths (overlapping, touching, or
+    apart; some subdivided), moved by ``shift``: its boundary, a 2-manifold."""
+    from exactgrasp.geometry.exact_solid import solid_boundary
+
+    meshes = []
+    for _ in range(int(rng.integers(1, 4))):
+        box = trimesh.creation.box(rng.integers(1, 5, 3) / 4)
+        box.apply_translation(rng.integers(-4, 5, 3) / 8)
+        meshes.append(box.subdivide() if rng.random() < 0.5 else box)
+    union = trimesh.util.concatenate(meshes)
+    V, F, _ = solid_boundary(np.asarray(union.vertices) + shift, np.asarray(union.faces))
+    return V, F
+
+
+def test_the_window_gives_the_whole_arrangement_on_random_boxes_and_balls():
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(7)
+    positive = 0
+    for _ in range(60):
+        shift = float(rng.choice([0.0, 1e3, 12345.5]))
+        hand = _random_hand(rng, shift)
+        ball = trimesh.creation.icosphere(int(rng.integers(0, 2)), float(rng.uniform(0.05, 0.6)))
+        pose = np.eye(4)
+        if rng.random() < 0.7:
+            pose[:3, :3] = Rotation.random(random_state=int(rng.integers(2**31))).as_matrix()
+        # Half of them on the boxes' grid: the ball's vertices on their faces' planes.
+        step = rng.integers(-4, 5, 3) / 8 if rng.random() < 0.5 else rng.uniform(-0.8, 0.8, 3)
+        pose[:3, 3] = shift + step
+        obj = (np.asarray(ball.vertices), np.asarray(ball.faces))
+        positive += _same_arrangement(hand, obj, pose) > 0
+    assert positive > 20
