@@ -1,8 +1,9 @@
 # cython: language_level=3
 """A hint to the CPU that a cache line will be read soon (`prefetch`), for the stages of the
 exact kernel that read rows scattered over tables larger than the caches (the hand's faces
-along a crossing curve, `_search.trace_pairs`; the co-tree edges' ends, `_seeds.cotree_seeds`). It loads nothing the program sees: results
-are the same to the bit with or without it.
+along a crossing curve, `_search.trace_pairs`; the co-tree edges' ends,
+`_seeds.cotree_seeds`). It loads nothing the program sees: results are the same to the bit
+with or without it.
 
 On x86-64 it is the instruction itself (``prefetcht0``, in inline assembly): GCC 12 dropped
 ``__builtin_prefetch`` from the inlined search loop at ``-O3``. Elsewhere it is the builtin,
