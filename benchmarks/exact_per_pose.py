@@ -17,6 +17,9 @@ round):
         PYTHONPATH=. python benchmarks/exact_per_pose.py --label new
     done
 
+``--pieces K`` also times the kernel in one call against K runs of neighbouring poses and K
+interleaved sets of them (how the intersector cuts a call for its threads).
+
 Prints the label, the poses, ``--repeat`` timings (ms a pose, after a warm-up that compiles the
 kernels) and the volumes' sum, which must agree to the bit between the two trees.
 """
@@ -76,6 +79,28 @@ def scene_and_poses(args):
     return grasp, poses[np.sort(np.unique(repeated_poses(poses), return_index=True)[1])]
 
 
+def time_pieces(intersector, poses: np.ndarray, pieces: int, label: str) -> None:
+    """Print the kernel's wall seconds over ``poses`` in one call, in ``pieces`` runs of
+    neighbouring poses and in ``pieces`` interleaved sets (every ``pieces``-th pose), each
+    the best of 3, in local coordinates as the intersector moves them."""
+    local = poses.copy()
+    local[:, :3, 3] += local[:, :3, :3] @ intersector.origin - intersector.origin
+    n = len(local)
+    ways = {
+        "one call": [np.arange(n)],
+        "runs": np.array_split(np.arange(n), pieces),
+        "interleaved": [np.arange(k, n, pieces) for k in range(pieces)],
+    }
+    best = {}
+    for _ in range(3):
+        for way, parts in ways.items():
+            start = time.perf_counter()
+            for ix in parts:
+                intersector._kernel(local[ix], intersector.capacity, False)
+            best[way] = min(best.get(way, np.inf), time.perf_counter() - start)
+    print(label, ", ".join(f"{way} {t:.3f} s" for way, t in best.items()))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--label", default="this tree")
@@ -84,6 +109,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--threads", action="store_true",
         help="also time the poses on two threads (n_jobs=2) against one, wall clock, alternating",
+    )  # fmt: skip
+    ap.add_argument(
+        "--pieces", type=int, default=0,
+        help="also time the kernel over the poses in one call, in that many runs of "
+        "neighbouring poses, and in that many interleaved sets (one thread, best of 3)",
     )  # fmt: skip
     add_data_options(ap)
     args = ap.parse_args(argv)
@@ -104,6 +134,8 @@ def main(argv: list[str] | None = None) -> int:
         args.label, len(poses), " ".join(f"{t:.3f}" for t in times), "ms a pose;",
         f"volumes' sum {float(volumes.sum())!r}",
     )  # fmt: skip
+    if args.pieces:
+        time_pieces(backend.intersector(grasp), poses, args.pieces, args.label)
     if args.threads:
         two = ExactBackend(broadphase=None, n_jobs=2)
         two.volumes(grasp, poses[:50])
