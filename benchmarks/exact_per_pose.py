@@ -17,8 +17,10 @@ round):
         PYTHONPATH=. python benchmarks/exact_per_pose.py --label new
     done
 
-``--pieces K`` also times the kernel in one call against K runs of neighbouring poses and K
-interleaved sets of them (how the intersector cuts a call for its threads).
+``--machine`` runs it in one process alone, then in two at once: the machine's own speed-up of
+two cores on this kernel, which two threads cannot pass. ``--pieces K`` also times the kernel
+in one call against K runs of neighbouring poses and K interleaved sets of them (how the
+intersector cuts a call for its threads).
 
 Prints the label, the poses, ``--repeat`` timings (ms a pose, after a warm-up that compiles the
 kernels) and the volumes' sum, which must agree to the bit between the two trees.
@@ -27,6 +29,8 @@ kernels) and the volumes' sum, which must agree to the bit between the two trees
 from __future__ import annotations
 
 import argparse
+import subprocess
+import sys
 import time
 import warnings
 
@@ -101,6 +105,33 @@ def time_pieces(intersector, poses: np.ndarray, pieces: int, label: str) -> None
     print(label, ", ".join(f"{way} {t:.3f} s" for way, t in best.items()))
 
 
+def machine_speed_up(args) -> int:
+    """Run this benchmark (``--repeat`` timings) in one process, then in two processes whose
+    timings start at the same moment; print the median ms a pose of each, and twice the
+    first over the mean of the two: the machine's own speed-up of two cores on this kernel."""
+    command = [sys.executable, __file__, "--scene", args.scene, "--repeat", str(args.repeat)]
+    command += ["--label", "p"]
+    command += ["--data", str(args.data)] if args.data else []
+
+    def medians(count: int) -> list[float]:
+        start = str(time.time() + 40.0)  # after every process has loaded its scene
+        runs = [
+            subprocess.Popen([*command, "--start-at", start], stdout=subprocess.PIPE, text=True)
+            for _ in range(count)
+        ]
+        lines = [run.communicate()[0].strip().splitlines()[-1] for run in runs]
+        # "p <poses> <timings> ms a pose; volumes' sum <sum>"
+        return [float(np.median([float(t) for t in line.split()[2:-6]])) for line in lines]
+
+    alone, both = medians(1)[0], medians(2)
+    print(
+        f"{args.scene}: one process alone {alone:.4f} ms a pose, two at once "
+        f"{both[0]:.4f} and {both[1]:.4f}: the machine's two-core speed-up "
+        f"x{2 * alone / float(np.mean(both)):.2f}"
+    )
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--label", default="this tree")
@@ -115,8 +146,16 @@ def main(argv: list[str] | None = None) -> int:
         help="also time the kernel over the poses in one call, in that many runs of "
         "neighbouring poses, and in that many interleaved sets (one thread, best of 3)",
     )  # fmt: skip
+    ap.add_argument(
+        "--machine", action="store_true",
+        help="only run this benchmark in one process alone, then in two at once: the "
+        "machine's own speed-up of two cores on this kernel (what threads cannot pass)",
+    )  # fmt: skip
+    ap.add_argument("--start-at", type=float, default=0.0, help=argparse.SUPPRESS)
     add_data_options(ap)
     args = ap.parse_args(argv)
+    if args.machine:
+        return machine_speed_up(args)
     scene = scene_and_poses(args)
     if scene is None:
         return 0
@@ -125,6 +164,8 @@ def main(argv: list[str] | None = None) -> int:
 
     backend = ExactBackend(broadphase=None, n_jobs=1)
     backend.volumes(grasp, poses[:50])
+    while time.time() < args.start_at:
+        time.sleep(0.01)
     times = []
     for _ in range(args.repeat):
         start = time.process_time()
