@@ -33,7 +33,7 @@ import numpy as np
 from exactgrasp.geometry.exact_cut import cut_exactly
 from exactgrasp.geometry.exact_solid import UNDECIDED, Rays, cut_faces, face_levels, patches
 
-__all__ = ["PAD", "window_regions"]
+__all__ = ["PAD", "face_boxes", "window_regions"]
 
 #: The box's padding, relative to the largest coordinate of the box: far above a rounding
 #: (2**-52), far below any geometry.
@@ -100,12 +100,24 @@ def window_regions(
     return cut, G, near[sources], patch, _levels(rays, patch, n_patch, core, lo, hi)
 
 
+def face_boxes(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The faces' bounding boxes, as `window_regions` takes them: their lowest and highest
+    coordinates along each axis, (3, m) each (a row per axis, contiguous).
+
+    Parameters
+    ----------
+    V : numpy.ndarray, shape (n, 3), float64
+    F : numpy.ndarray, shape (m, 3), int64
+    """
+    a, b, c = (np.ascontiguousarray(V[F[:, k]].T) for k in range(3))
+    return np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
+
+
 def _boxes(V: np.ndarray, F: np.ndarray, known) -> tuple[np.ndarray, np.ndarray]:
-    """Every face's lowest and highest coordinates along each axis, (3, m) each: the first
-    ones ``known`` (or none), the others made from their corners."""
+    """Every face's box (`face_boxes`): the first ones ``known`` (or none), the others made
+    from their corners."""
     j = 0 if known is None else known[0].shape[1]
-    a, b, c = (np.ascontiguousarray(V[F[j:, k]].T) for k in range(3))
-    low, high = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
+    low, high = face_boxes(V, F[j:])
     if not j:
         return low, high
     return np.concatenate([known[0], low], axis=1), np.concatenate([known[1], high], axis=1)

@@ -29,6 +29,7 @@ import numpy as np
 
 from exactgrasp.backends.exact.tables import MomentTables
 from exactgrasp.backends.exact.tolerances import U
+from exactgrasp.geometry.exact_window import face_boxes
 from exactgrasp.geometry.level_sets import LevelSet, level_set
 
 __all__ = [
@@ -128,9 +129,7 @@ class ArrangedHand:
             if self._welded is None:
                 W, inverse = np.unique(self.vertices, axis=0, return_inverse=True)
                 H = inverse.reshape(-1)[np.asarray(self.faces, np.int64)]
-                a, b, c = (np.ascontiguousarray(W[H[:, k]].T) for k in range(3))
-                boxes = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
-                self._welded = W, np.ascontiguousarray(W.T), H, boxes
+                self._welded = W, np.ascontiguousarray(W.T), H, face_boxes(W, H)
             W, columns, H, boxes = self._welded
         # A hand vertex equal to an object's lies in the object's box.
         lo, hi = moved.min(0), moved.max(0)
