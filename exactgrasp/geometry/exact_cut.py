@@ -338,6 +338,7 @@ def cut_exactly(vertices: np.ndarray, faces: np.ndarray):
         Distinct points (welded: equal coordinates are one vertex).
     faces : numpy.ndarray, shape (m, 3), int64
         A closed surface, or the part of one that is cut (`exact_window`).
+
     Returns
     -------
     arrangement : Arrangement

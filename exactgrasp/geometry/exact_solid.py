@@ -38,7 +38,15 @@ from exactgrasp.geometry.rational import centroid, orient2d, plane_of, side, tri
 from exactgrasp.geometry.topology import edge_defects, format_point
 from exactgrasp.geometry.wedges import split_nonmanifold
 
-__all__ = ["Rays", "cut_faces", "face_levels", "patches", "solid_boundary", "winding_regions"]
+__all__ = [
+    "UNDECIDED",
+    "Rays",
+    "cut_faces",
+    "face_levels",
+    "patches",
+    "solid_boundary",
+    "winding_regions",
+]
 
 _AXES = ((1, 2), (2, 0), (0, 1))
 #: The levels of a patch no ray asked (zero-area faces only): below and above every level,

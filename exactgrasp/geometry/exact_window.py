@@ -61,6 +61,7 @@ def window_regions(
     face_boxes : (numpy.ndarray, numpy.ndarray), shape (3, j) each, optional
         The first j faces' bounding boxes (their lowest and highest coordinates along each
         axis), where the caller has them; the others' are made here.
+
     Returns
     -------
     cut : exact_cut.Arrangement
@@ -78,24 +79,19 @@ def window_regions(
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
-    face_boxes = _boxes(V, F, face_boxes)
+    boxes = _boxes(V, F, face_boxes)
     pad = PAD * float(np.abs(np.concatenate([lo, hi])).max()) + np.finfo(float).tiny
-    near, across = _near_and_across(face_boxes, lo - pad, hi + pad)
+    near, across = _near_and_across(boxes, lo - pad, hi + pad)
     cut, tiles, tiled, _ = cut_exactly(V, F[near])
     G, counts, sources, _ = cut_faces(F[near], tiles, tiled)
-    approx = cut.approx.array()
-    a, b, c = approx[G[:, 0]], approx[G[:, 1]], approx[G[:, 2]]
-    core = np.all(
-        (np.minimum(np.minimum(a, b), c) >= lo - pad / 4)
-        & (np.maximum(np.maximum(a, b), c) <= hi + pad / 4),
-        axis=1,
-    )
+    low, high = _boxes(cut.approx.array(), G, None)
+    core = np.all((low >= (lo - pad / 4)[:, None]) & (high <= (hi + pad / 4)[:, None]), axis=0)
     n_patch, patch = patches(G, len(cut.points), core)
     rays = Rays(
         cut,
         np.concatenate([G, F[across]]),
         np.concatenate([counts, np.ones(len(across), np.int64)]),
-        (face_boxes[0][:, across].T, face_boxes[1][:, across].T),
+        (boxes[0][:, across].T, boxes[1][:, across].T),
     )
     return cut, G, near[sources], patch, _levels(rays, patch, n_patch, core, lo, hi)
 
@@ -123,10 +119,10 @@ def _boxes(V: np.ndarray, F: np.ndarray, known) -> tuple[np.ndarray, np.ndarray]
     return np.concatenate([known[0], low], axis=1), np.concatenate([known[1], high], axis=1)
 
 
-def _near_and_across(face_boxes, lo: np.ndarray, hi: np.ndarray):
+def _near_and_across(boxes, lo: np.ndarray, hi: np.ndarray):
     """The faces whose boxes meet the padded box ``[lo, hi]``, and those a ray from it along
     +k may cross beyond them: across it along the two other axes, above it along k."""
-    low, high = face_boxes
+    low, high = boxes
     under = [low[k] <= hi[k] for k in range(3)]
     meets = [under[k] & (high[k] >= lo[k]) for k in range(3)]
     near = meets[0] & meets[1] & meets[2]
@@ -146,19 +142,15 @@ def _levels(rays: Rays, patch, n_patch: int, core: np.ndarray, lo, hi) -> np.nda
     asked = np.flatnonzero(core)
     # The patches' faces in turn, each patch's first: most patches need only that one.
     asked = asked[np.argsort(patch[asked], kind="stable")]
-    done = np.zeros(n_patch, bool)
     start = np.flatnonzero(np.r_[True, np.diff(patch[asked]) != 0])
-    for first in start.tolist():
-        p = int(patch[asked[first]])
-        for f in asked[first:].tolist():
-            if patch[f] != p or done[p]:
-                break
+    for first, stop in zip(start.tolist(), np.r_[start[1:], len(asked)].tolist(), strict=True):
+        for f in asked[first:stop].tolist():
             if not _rounds_into(rays.centre(f)[1], lo, hi):
                 continue
             found = face_levels(rays, f)
             if found is not None:
-                levels[p] = found
-                done[p] = True
+                levels[patch[f]] = found
+                break
     return levels
 
 
